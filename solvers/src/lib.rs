@@ -1,0 +1,28 @@
+//! QP standard form, the backend trait and the three sub-problem backends of contactlab.
+//!
+//! Every backend solves the same problem
+//!
+//! ```text
+//!     min ½ xᵀ P x + qᵀ x    s.t.  l ≤ A x ≤ u
+//! ```
+//!
+//! with `P` symmetric positive semi-definite (stored as its upper triangle, CSC), `A` in CSC,
+//! `l_i ∈ [-∞, ∞)`, `u_i ∈ (-∞, ∞]`, `l_i ≤ u_i` (`l_i = u_i` is an equality row).
+//!
+//! **Dual sign convention** (the OSQP one, shared by every backend): the returned `y` satisfies
+//! stationarity `P x + q + Aᵀ y = 0`, with `y_i ≤ 0` when the lower bound of row `i` is active,
+//! `y_i ≥ 0` when the upper bound is active and `y_i = 0` on inactive rows. A contact row
+//! `n·(φ(a_i) − φ(x)) ≥ ε` is a lower bound, so its multiplier is `−y_i ≥ 0`.
+//!
+//! The core library never imports a backend: it talks to [`QpBackend`] only, and the binary
+//! picks one by name with [`backend_from_name`].
+#![warn(missing_docs)]
+
+pub mod backend;
+pub mod clarabel_backend;
+pub mod osqp_backend;
+pub mod qp;
+pub mod uzawa;
+
+pub use backend::{backend_from_name, QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart, BACKEND_NAMES};
+pub use qp::{CscMatrix, Qp};

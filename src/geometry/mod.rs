@@ -1,0 +1,1 @@
+//! Geometry kernels, one file per primitive pair.
