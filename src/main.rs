@@ -1,1 +1,344 @@
-fn main() {}
+//! The `contactlab` command line.
+//!
+//! `contactlab run [balloons] [--backend clarabel|osqp|uzawa] [--n 40] [--out DIR] …` runs the
+//! outer loop on a scene and writes a run directory (see README).
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use contactlab::diagnostics::contact_pattern;
+use contactlab::outer::{run, IterationRecord, OuterSettings};
+use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
+use contactlab::output::vtk::{write_vtu, PvdSeries};
+use contactlab::output::write_atomic;
+use contactlab::pairs::point_edge_pairs;
+use contactlab::scene::balloons::{self, classify_state, BalloonsParams};
+use contactlab_solvers::{backend_from_name, QpSettings};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "contactlab",
+    version,
+    about = "Pantz (2008) frictionless contact: runs and measurements"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the outer loop on a scene and write a run directory.
+    Run(RunArgs),
+}
+
+#[derive(clap::Args, Clone)]
+struct RunArgs {
+    /// Scene name (only `balloons` so far).
+    #[arg(default_value = "balloons")]
+    scene: String,
+    /// Sub-problem backend: clarabel, osqp or uzawa.
+    #[arg(long, default_value = "clarabel")]
+    backend: String,
+    /// Elements per membrane.
+    #[arg(long, default_value_t = 40)]
+    n: usize,
+    /// Gas constant C.
+    #[arg(long, default_value_t = 50.0)]
+    c: f64,
+    /// Elasticity coefficient μ.
+    #[arg(long, default_value_t = 1.0)]
+    mu: f64,
+    /// ε (default h/10).
+    #[arg(long)]
+    eps: Option<f64>,
+    /// Relative perturbation of one C_i, as BALLOON:VALUE (e.g. 0:1e-3); repeatable.
+    #[arg(long = "perturb", value_parser = parse_perturb)]
+    perturb: Vec<(usize, f64)>,
+    /// Initial heights of the four balloons, comma-separated (e.g. 0.9,0.2,0.9,0.2).
+    #[arg(long, value_delimiter = ',')]
+    heights: Option<Vec<f64>>,
+    /// Relative energy tolerance of the outer stopping rule.
+    #[arg(long, default_value_t = 1e-10)]
+    tol_j: f64,
+    /// Maximum outer iterations.
+    #[arg(long, default_value_t = 2000)]
+    max_outer: usize,
+    /// Backend tolerance (eps_abs = eps_rel).
+    #[arg(long, default_value_t = 1e-9)]
+    qp_tol: f64,
+    /// Run directory (default runs/<scene>-default).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write a VTK frame every K outer iterations (the last is always written).
+    #[arg(long, default_value_t = 1)]
+    frame_every: usize,
+    /// No progress line.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
+    let (i, v) = s
+        .split_once(':')
+        .ok_or_else(|| format!("--perturb {s:?}: expected BALLOON:VALUE, e.g. 0:1e-3"))?;
+    let i: usize = i
+        .parse()
+        .map_err(|_| format!("--perturb {s:?}: balloon index {i:?} is not an integer 0..3"))?;
+    if i > 3 {
+        return Err(format!(
+            "--perturb {s:?}: balloon index {i} out of range 0..3"
+        ));
+    }
+    let v: f64 = v
+        .parse()
+        .map_err(|_| format!("--perturb {s:?}: value {v:?} is not a number"))?;
+    Ok((i, v))
+}
+
+#[derive(serde::Serialize)]
+struct Summary {
+    scene: String,
+    dim: usize,
+    n: usize,
+    h: f64,
+    eps: f64,
+    backend: String,
+    status: &'static str,
+    outer_iterations: usize,
+    inner_iterations: usize,
+    backend_iterations: usize,
+    initial_energy: f64,
+    final_energy: f64,
+    min_distance: f64,
+    closest_pair: String,
+    wall_time_s: f64,
+    contact_pattern: Vec<[String; 2]>,
+    state: String,
+    energy_monotone: bool,
+    all_iterates_admissible: bool,
+    params: BalloonsParams,
+    settings: OuterSettings,
+    qp_tol: f64,
+}
+
+fn run_cmd(a: RunArgs) -> Result<()> {
+    if a.scene != "balloons" {
+        bail!("unknown scene {:?} (available: balloons)", a.scene);
+    }
+    let mut params = BalloonsParams {
+        n: a.n,
+        c: a.c,
+        mu: a.mu,
+        eps: a.eps,
+        ..Default::default()
+    };
+    for (i, v) in &a.perturb {
+        params.perturb[*i] = *v;
+    }
+    if let Some(hs) = &a.heights {
+        if hs.len() != 4 {
+            bail!(
+                "--heights takes 4 values (one per balloon), got {}",
+                hs.len()
+            );
+        }
+        params.heights.copy_from_slice(hs);
+    }
+    let scene = balloons::build(&params)?;
+    let qps = QpSettings {
+        eps_abs: a.qp_tol,
+        eps_rel: a.qp_tol,
+        ..Default::default()
+    };
+    let mut backend = backend_from_name(&a.backend, &qps)?;
+    let settings = OuterSettings {
+        tol_j: a.tol_j,
+        max_outer: a.max_outer,
+        ..Default::default()
+    };
+    if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
+        bail!("--tol-j must be > 0, got {}", settings.tol_j);
+    }
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-default", scene.name)));
+    let frames = out.join("frames");
+    std::fs::create_dir_all(&frames)
+        .with_context(|| format!("cannot create run directory {}", frames.display()))?;
+    let mesh = &scene.mesh;
+    let mut hist = csv::Writer::from_path(out.join("history.csv"))?;
+    let mut pvd = PvdSeries::default();
+    let mut energies: Vec<(usize, f64)> = Vec::new();
+    let mut snapshots: Vec<(usize, Vec<f64>)> = Vec::new();
+    let mut monotone = true;
+    let mut admissible = true;
+    let mut last_frame = 0usize;
+    let mut io_err: Option<anyhow::Error> = None;
+    let quiet = a.quiet;
+    let eps = scene.eps;
+    let mut observer = |rec: &IterationRecord, x: &[f64]| {
+        if let Some(&(_, jprev)) = energies.last() {
+            monotone &= rec.energy <= jprev;
+        }
+        admissible &= rec.min_distance >= eps;
+        energies.push((rec.iteration, rec.energy));
+        snapshots.push((rec.iteration, x.to_vec()));
+        let mut step = || -> Result<()> {
+            hist.serialize(rec)?;
+            hist.flush()?;
+            if rec.iteration.is_multiple_of(a.frame_every.max(1)) {
+                let name = format!("frame_{:05}.vtu", rec.iteration);
+                write_vtu(&frames.join(&name), 2, x, &mesh.edges, &mesh.triangles, &[])?;
+                pvd.push(rec.iteration as f64, format!("frames/{name}"));
+                pvd.write(&out.join("frames.pvd"))?;
+                last_frame = rec.iteration;
+            }
+            Ok(())
+        };
+        if let Err(e) = step() {
+            io_err.get_or_insert(e);
+        }
+        if !quiet {
+            eprint!(
+                "\r[{}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
+                a.backend, rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
+            );
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let res = run(
+        mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        backend.as_mut(),
+        &settings,
+        &mut observer,
+    )?;
+    #[allow(clippy::drop_non_drop)] // ends the closure's borrows of io_err, hist, pvd
+    drop(observer);
+    if !quiet {
+        eprintln!();
+    }
+    if let Some(e) = io_err {
+        return Err(e.context("writing the run directory"));
+    }
+    hist.flush()?;
+    drop(hist);
+    if last_frame != res.outer_iterations {
+        let name = format!("frame_{:05}.vtu", res.outer_iterations);
+        write_vtu(
+            &frames.join(&name),
+            2,
+            &res.x,
+            &mesh.edges,
+            &mesh.triangles,
+            &[],
+        )?;
+        pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
+        pvd.write(&out.join("frames.pvd"))?;
+    }
+    let (pairs, _) = point_edge_pairs(mesh);
+    let pattern = contact_pattern(mesh, &res.x, &pairs, scene.eps);
+    let names: Vec<[String; 2]> = pattern
+        .iter()
+        .map(|&(i, j)| [mesh.bodies[i].name.clone(), mesh.bodies[j].name.clone()])
+        .collect();
+    let balloon_pairs: Vec<(usize, usize)> = pattern
+        .iter()
+        .copied()
+        .filter(|&(i, j)| i < 4 && j < 4)
+        .collect();
+    let state = classify_state(&balloon_pairs);
+    // Picture: initial, an intermediate and the final shapes, J beside them.
+    let mid = snapshots.len() / 2;
+    let shapes = vec![
+        Shape {
+            label: "initial (k=0)".into(),
+            x: &snapshots[0].1,
+            edges: &mesh.edges,
+            triangles: &mesh.triangles,
+        },
+        Shape {
+            label: format!("intermediate (k={})", snapshots[mid].0),
+            x: &snapshots[mid].1,
+            edges: &mesh.edges,
+            triangles: &mesh.triangles,
+        },
+        Shape {
+            label: format!("final (k={})", res.outer_iterations),
+            x: &res.x,
+            edges: &mesh.edges,
+            triangles: &mesh.triangles,
+        },
+    ];
+    let title = format!(
+        "balloons n={} backend={} state={} J={:.10e}",
+        params.n, a.backend, state, res.energy
+    );
+    write_svg(
+        &out.join("shapes.svg"),
+        &shapes_and_energy_svg(&shapes, &energies, &title),
+    )?;
+    let summary = Summary {
+        scene: scene.name.clone(),
+        dim: 2,
+        n: params.n,
+        h: scene.h,
+        eps: scene.eps,
+        backend: a.backend.clone(),
+        status: res.status.as_str(),
+        outer_iterations: res.outer_iterations,
+        inner_iterations: res.inner_iterations,
+        backend_iterations: res.backend_iterations,
+        initial_energy: energies[0].1,
+        final_energy: res.energy,
+        min_distance: res.min_distance.distance,
+        closest_pair: res.min_distance.pair.to_string(),
+        wall_time_s: res.wall_time_s,
+        contact_pattern: names,
+        state: state.clone(),
+        energy_monotone: monotone,
+        all_iterates_admissible: admissible,
+        params,
+        settings,
+        qp_tol: a.qp_tol,
+    };
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!(
+        "{}: status {} after {} outer iterations, J = {:.12e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        a.backend,
+        res.status.as_str(),
+        res.outer_iterations,
+        res.energy,
+        state,
+        res.min_distance.distance / scene.eps,
+        res.wall_time_s,
+        out.display()
+    );
+    if !monotone || !admissible {
+        bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
+    }
+    Ok(())
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Run(a)) => run_cmd(a),
+        None => match Cli::parse_from(["contactlab", "run"]).command {
+            Some(Command::Run(a)) => run_cmd(a),
+            None => unreachable!("`run` parses to Command::Run"),
+        },
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(2);
+    }
+}

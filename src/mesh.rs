@@ -126,24 +126,48 @@ impl Mesh {
         for (i, e) in self.edges.iter().enumerate() {
             for &vertex in e {
                 if vertex >= nv {
-                    return Err(MeshError::DanglingIndex { element: "edge", index: i, vertex, nv });
+                    return Err(MeshError::DanglingIndex {
+                        element: "edge",
+                        index: i,
+                        vertex,
+                        nv,
+                    });
                 }
             }
             let len = (Self::p2(&self.x_ref, e[0]) - Self::p2(&self.x_ref, e[1])).norm();
             if len == 0.0 {
-                return Err(MeshError::Degenerate { element: "edge", index: i, measure: "length", value: len });
+                return Err(MeshError::Degenerate {
+                    element: "edge",
+                    index: i,
+                    measure: "length",
+                    value: len,
+                });
             }
         }
         for (i, t) in self.triangles.iter().enumerate() {
             for &vertex in t {
                 if vertex >= nv {
-                    return Err(MeshError::DanglingIndex { element: "triangle", index: i, vertex, nv });
+                    return Err(MeshError::DanglingIndex {
+                        element: "triangle",
+                        index: i,
+                        vertex,
+                        nv,
+                    });
                 }
             }
-            let (a, b, c) = (Self::p2(&self.x_ref, t[0]), Self::p2(&self.x_ref, t[1]), Self::p2(&self.x_ref, t[2]));
+            let (a, b, c) = (
+                Self::p2(&self.x_ref, t[0]),
+                Self::p2(&self.x_ref, t[1]),
+                Self::p2(&self.x_ref, t[2]),
+            );
             let area = 0.5 * (b - a).perp(&(c - a));
             if area <= 0.0 {
-                return Err(MeshError::Degenerate { element: "triangle", index: i, measure: "signed area", value: area });
+                return Err(MeshError::Degenerate {
+                    element: "triangle",
+                    index: i,
+                    measure: "signed area",
+                    value: area,
+                });
             }
         }
         Ok(())

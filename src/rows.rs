@@ -1,1 +1,78 @@
-//! (in progress)
+//! Rows of T(ψ) in 2D, eq. (4): for every `point_edge` pair (x, a), x ∉ a,
+//!
+//! ```text
+//!     n_{a,x}(ψ) · (φ(a_i) − φ(x)) ≥ ε,   i = 0, 1,
+//! ```
+//!
+//! with `n_{a,x}(ψ)` the unit vector from ψ(x) to the closest point of ψ(a) (eq. 5). Both rows
+//! are linear in φ, so T(ψ) is a convex polyhedron; it contains ψ when ψ is admissible, and by
+//! Lemma 4.2 it lies inside A_{h,ε}.
+
+use crate::geometry::point_edge_distance;
+use crate::mesh::Mesh;
+use crate::pairs::PointEdgePair;
+use nalgebra::Vector2;
+
+/// The two rows of one `point_edge` pair, frozen at ψ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointEdgeRow {
+    /// The pair.
+    pub pair: PointEdgePair,
+    /// Edge vertices `[a0, a1]`.
+    pub edge: [usize; 2],
+    /// Unit normal `n_{a,x}(ψ)`, from ψ(x) towards ψ(a).
+    pub n: Vector2<f64>,
+    /// `dist(ψ(x), ψ(a))`.
+    pub distance: f64,
+    /// Barycentric coordinates of the closest point of ψ(a).
+    pub alpha: [f64; 2],
+}
+
+impl PointEdgeRow {
+    /// Values `n·(φ(a_i) − φ(x))` of the two rows at `phi`.
+    #[inline]
+    pub fn values(&self, phi: &[f64]) -> [f64; 2] {
+        let px = Mesh::p2(phi, self.pair.x);
+        [
+            self.n.dot(&(Mesh::p2(phi, self.edge[0]) - px)),
+            self.n.dot(&(Mesh::p2(phi, self.edge[1]) - px)),
+        ]
+    }
+}
+
+/// Builds the rows of T(ψ) for `pairs`. A pair at distance 0 (ψ not admissible) has no normal;
+/// the caller has checked admissibility first, so this returns `None` then.
+pub fn point_edge_rows(
+    mesh: &Mesh,
+    psi: &[f64],
+    pairs: &[PointEdgePair],
+) -> Option<Vec<PointEdgeRow>> {
+    let mut rows = Vec::with_capacity(pairs.len());
+    for &pair in pairs {
+        let edge = mesh.edges[pair.a];
+        let px = Mesh::p2(psi, pair.x);
+        let q = point_edge_distance(&px, &Mesh::p2(psi, edge[0]), &Mesh::p2(psi, edge[1]));
+        if q.distance <= 0.0 {
+            return None;
+        }
+        let n = (q.closest - px) / q.distance;
+        rows.push(PointEdgeRow {
+            pair,
+            edge,
+            n,
+            distance: q.distance,
+            alpha: q.alpha,
+        });
+    }
+    Some(rows)
+}
+
+/// Smallest row value minus ε over all rows at `phi` (≥ 0 iff φ ∈ T(ψ)).
+pub fn min_slack(rows: &[PointEdgeRow], phi: &[f64], eps: f64) -> f64 {
+    rows.iter()
+        .map(|r| {
+            let v = r.values(phi);
+            v[0].min(v[1]) - eps
+        })
+        .fold(f64::INFINITY, f64::min)
+}

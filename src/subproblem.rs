@@ -1,1 +1,285 @@
-//! (in progress)
+//! One outer step: minimize J over the fixed polyhedron T(ψ) (SPEC §2, "Sub-problems").
+//!
+//! At an inner iterate `y ∈ T(ψ)` the quadratic model `q(d) = g·d + ½dᵀ(H + ρI)d` is built
+//! from the projected (PSD) Hessian `H`; rank-one Hessian terms `c w wᵀ` (the gas term's
+//! `C/V² ∇V∇Vᵀ`) enter through one auxiliary variable `s = w·d` and one equality row, so `P`
+//! stays sparse. The QP
+//!
+//! ```text
+//!     min q(d)   s.t.   n·(d(a_i) − d(x)) ≥ ε + δ − n·(y(a_i) − y(x))   for every row of T(ψ)
+//! ```
+//!
+//! over the free degrees of freedom goes to the backend; then a backtracking (Armijo) line
+//! search on J along `d`. Any point of `[y, y + d]` is in T(ψ) by convexity.
+//!
+//! Two safeguards, both kept out of the reported energy:
+//! - the proximal term `ρ = max(rho_abs, rho_rel · max diag H)` makes `P` positive definite (a
+//!   slack membrane with |F| < 1 has no stiffness);
+//! - the QP rows use `ε + δ`, `δ = margin_rel·ε + margin_abs`, so that a backend's feasibility
+//!   tolerance cannot push an iterate below ε. Every accepted point is checked against the
+//!   exact rows `≥ ε` of T(ψ).
+
+use crate::energy::TotalEnergy;
+use crate::mesh::Mesh;
+use crate::rows::{min_slack, PointEdgeRow};
+use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
+use std::time::Instant;
+
+/// Settings of the inner (sub-problem) loop.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InnerSettings {
+    /// Maximum Newton-type steps per T(ψ).
+    pub max_inner: usize,
+    /// Stop the inner loop when `J(y) − J(y_new) ≤ tol_inner · max(1, |J|)`.
+    pub tol_inner: f64,
+    /// Absolute floor of the proximal weight ρ.
+    pub rho_abs: f64,
+    /// ρ relative to the largest diagonal entry of H.
+    pub rho_rel: f64,
+    /// Row margin δ relative to ε.
+    pub margin_rel: f64,
+    /// Absolute row margin.
+    pub margin_abs: f64,
+    /// Maximum number of step halvings in the line search.
+    pub max_halvings: usize,
+}
+
+impl Default for InnerSettings {
+    fn default() -> Self {
+        InnerSettings {
+            max_inner: 50,
+            tol_inner: 1e-12,
+            rho_abs: 1e-8,
+            rho_rel: 1e-8,
+            margin_rel: 1e-6,
+            margin_abs: 1e-11,
+            max_halvings: 40,
+        }
+    }
+}
+
+/// Outcome of one sub-problem.
+#[derive(Clone, Debug)]
+pub struct SubproblemResult {
+    /// Final inner iterate (∈ T(ψ)).
+    pub y: Vec<f64>,
+    /// J(y).
+    pub energy: f64,
+    /// Inner (Newton-type) steps taken.
+    pub inner_iterations: usize,
+    /// Backend iterations summed over the inner steps.
+    pub backend_iterations: usize,
+    /// Status of the last QP solve.
+    pub qp_status: QpStatus,
+    /// The line search could not decrease J along the last direction.
+    pub line_search_failed: bool,
+    /// Contact multipliers of the last QP, two per row pair (`μ = −y_QP ≥ 0`).
+    pub multipliers: Vec<[f64; 2]>,
+    /// Seconds spent assembling (gradient, Hessian, QP matrices).
+    pub t_assembly_s: f64,
+    /// Seconds spent in the backend.
+    pub t_solve_s: f64,
+}
+
+/// Maps vertex dofs to QP columns (free dofs only).
+pub struct DofMap {
+    /// `col[dof]` = QP column or `usize::MAX` for a fixed dof.
+    pub col: Vec<usize>,
+    /// Number of free dofs.
+    pub nfree: usize,
+}
+
+impl DofMap {
+    /// Free dofs of `mesh`, in vertex order.
+    pub fn new(mesh: &Mesh) -> Self {
+        let mut col = vec![usize::MAX; mesh.x_ref.len()];
+        let mut k = 0;
+        for v in 0..mesh.nv() {
+            if !mesh.fixed[v] {
+                for c in 0..mesh.dim {
+                    col[mesh.dim * v + c] = k;
+                    k += 1;
+                }
+            }
+        }
+        DofMap { col, nfree: k }
+    }
+}
+
+/// Builds the QP of one inner step at `y`. Returns the QP (rows: first two per contact pair,
+/// then one equality row per rank-one term).
+#[allow(clippy::needless_range_loop)] // i indexes the row and the edge vertex together
+pub fn build_qp(
+    mesh: &Mesh,
+    energy: &TotalEnergy,
+    dofs: &DofMap,
+    rows: &[PointEdgeRow],
+    y: &[f64],
+    eps_qp: f64,
+    settings: &InnerSettings,
+) -> Result<Qp, QpError> {
+    let g = energy.gradient(y);
+    let h = energy.hessian(y, true);
+    let nf = dofs.nfree;
+    let naux = h.rank_one.len();
+    let n = nf + naux;
+    let mut ptrip: Vec<(usize, usize, f64)> = Vec::with_capacity(h.triplets.len() / 2 + n);
+    let mut maxdiag: f64 = 0.0;
+    for &(i, j, v) in &h.triplets {
+        let (ci, cj) = (dofs.col[i], dofs.col[j]);
+        if ci == usize::MAX || cj == usize::MAX || ci > cj {
+            continue;
+        }
+        if ci == cj {
+            maxdiag = maxdiag.max(v);
+        }
+        ptrip.push((ci, cj, v));
+    }
+    let rho = settings.rho_abs.max(settings.rho_rel * maxdiag);
+    for c in 0..nf {
+        ptrip.push((c, c, rho));
+    }
+    for (k, r) in h.rank_one.iter().enumerate() {
+        ptrip.push((nf + k, nf + k, r.coef));
+    }
+    let p = CscMatrix::from_triplets(n, n, &ptrip)?;
+    let mut q = vec![0.0; n];
+    for (dof, &c) in dofs.col.iter().enumerate() {
+        if c != usize::MAX {
+            q[c] = g[dof];
+        }
+    }
+    let m = 2 * rows.len() + naux;
+    let mut atrip: Vec<(usize, usize, f64)> = Vec::with_capacity(12 * rows.len());
+    let mut l = vec![0.0; m];
+    let u = {
+        let mut u = vec![f64::INFINITY; m];
+        for v in u.iter_mut().skip(2 * rows.len()) {
+            *v = 0.0;
+        }
+        u
+    };
+    let dim = mesh.dim;
+    for (r, row) in rows.iter().enumerate() {
+        let vals = row.values(y);
+        for i in 0..2 {
+            let ri = 2 * r + i;
+            l[ri] = eps_qp - vals[i];
+            for c in 0..dim {
+                let cx = dofs.col[dim * row.pair.x + c];
+                if cx != usize::MAX {
+                    atrip.push((ri, cx, -row.n[c]));
+                }
+                let ca = dofs.col[dim * row.edge[i] + c];
+                if ca != usize::MAX {
+                    atrip.push((ri, ca, row.n[c]));
+                }
+            }
+        }
+    }
+    for (k, r) in h.rank_one.iter().enumerate() {
+        let ri = 2 * rows.len() + k;
+        atrip.push((ri, nf + k, 1.0));
+        for &(dof, w) in &r.w {
+            let c = dofs.col[dof];
+            if c != usize::MAX {
+                atrip.push((ri, c, -w));
+            }
+        }
+    }
+    let a = CscMatrix::from_triplets(m, n, &atrip)?;
+    Ok(Qp { p, q, a, l, u })
+}
+
+/// Minimizes J over T(ψ) starting from `psi` (which must lie in T(ψ)).
+#[allow(clippy::too_many_arguments)]
+pub fn solve_subproblem(
+    mesh: &Mesh,
+    energy: &TotalEnergy,
+    dofs: &DofMap,
+    rows: &[PointEdgeRow],
+    psi: &[f64],
+    eps: f64,
+    backend: &mut dyn QpBackend,
+    settings: &InnerSettings,
+) -> Result<SubproblemResult, QpError> {
+    let eps_qp = eps + settings.margin_rel * eps + settings.margin_abs;
+    let mut y = psi.to_vec();
+    let mut jy = energy.value(&y);
+    let mut res = SubproblemResult {
+        y: Vec::new(),
+        energy: jy,
+        inner_iterations: 0,
+        backend_iterations: 0,
+        qp_status: QpStatus::Solved,
+        line_search_failed: false,
+        multipliers: vec![[0.0; 2]; rows.len()],
+        t_assembly_s: 0.0,
+        t_solve_s: 0.0,
+    };
+    let mut warm: Option<WarmStart> = None;
+    for _ in 0..settings.max_inner {
+        let t0 = Instant::now();
+        let qp = build_qp(mesh, energy, dofs, rows, &y, eps_qp, settings)?;
+        res.t_assembly_s += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let sol = backend.solve(&qp, warm.as_ref())?;
+        res.t_solve_s += t1.elapsed().as_secs_f64();
+        res.inner_iterations += 1;
+        res.backend_iterations += sol.iterations;
+        res.qp_status = sol.status;
+        if sol.status != QpStatus::Solved {
+            break;
+        }
+        for (r, mult) in res.multipliers.iter_mut().enumerate() {
+            *mult = [-sol.y[2 * r], -sol.y[2 * r + 1]];
+        }
+        let mut d = vec![0.0; y.len()];
+        for (dof, &c) in dofs.col.iter().enumerate() {
+            if c != usize::MAX {
+                d[dof] = sol.x[c];
+            }
+        }
+        let g = energy.gradient(&y);
+        let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
+        if slope >= 0.0 {
+            // d = 0 up to round-off: y is optimal for the model.
+            break;
+        }
+        let mut t = 1.0;
+        let mut accepted = None;
+        for _ in 0..=settings.max_halvings {
+            let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
+            let jt = energy.value(&trial);
+            if jt.is_finite() && jt <= jy + 1e-4 * t * slope && min_slack(rows, &trial, eps) >= 0.0
+            {
+                accepted = Some((trial, jt));
+                break;
+            }
+            t *= 0.5;
+        }
+        match accepted {
+            Some((trial, jt)) => {
+                let dec = jy - jt;
+                y = trial;
+                jy = jt;
+                warm = Some(WarmStart {
+                    x: vec![0.0; qp.n()],
+                    y: sol.y.clone(),
+                });
+                if dec <= settings.tol_inner * jy.abs().max(1.0) {
+                    break;
+                }
+            }
+            None => {
+                // A predicted decrease at round-off level is convergence, not a failure.
+                res.line_search_failed = -slope > 1e-12 * jy.abs().max(1.0);
+                break;
+            }
+        }
+    }
+    res.y = y;
+    res.energy = jy;
+    Ok(res)
+}

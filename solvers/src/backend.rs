@@ -135,7 +135,12 @@ pub struct QpSettings {
 
 impl Default for QpSettings {
     fn default() -> Self {
-        QpSettings { eps_abs: 1e-9, eps_rel: 1e-9, max_iter: 100_000, time_limit_s: f64::INFINITY }
+        QpSettings {
+            eps_abs: 1e-9,
+            eps_rel: 1e-9,
+            max_iter: 100_000,
+            time_limit_s: f64::INFINITY,
+        }
     }
 }
 
@@ -143,16 +148,32 @@ impl QpSettings {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), QpError> {
         if !(self.eps_abs > 0.0 && self.eps_abs.is_finite()) {
-            return Err(QpError::InvalidSetting { name: "eps_abs", value: self.eps_abs.to_string(), reason: "must be finite and > 0" });
+            return Err(QpError::InvalidSetting {
+                name: "eps_abs",
+                value: self.eps_abs.to_string(),
+                reason: "must be finite and > 0",
+            });
         }
         if !(self.eps_rel >= 0.0 && self.eps_rel.is_finite()) {
-            return Err(QpError::InvalidSetting { name: "eps_rel", value: self.eps_rel.to_string(), reason: "must be finite and >= 0" });
+            return Err(QpError::InvalidSetting {
+                name: "eps_rel",
+                value: self.eps_rel.to_string(),
+                reason: "must be finite and >= 0",
+            });
         }
         if self.max_iter == 0 {
-            return Err(QpError::InvalidSetting { name: "max_iter", value: "0".into(), reason: "must be >= 1" });
+            return Err(QpError::InvalidSetting {
+                name: "max_iter",
+                value: "0".into(),
+                reason: "must be >= 1",
+            });
         }
         if self.time_limit_s.is_nan() || self.time_limit_s <= 0.0 {
-            return Err(QpError::InvalidSetting { name: "time_limit_s", value: self.time_limit_s.to_string(), reason: "must be > 0" });
+            return Err(QpError::InvalidSetting {
+                name: "time_limit_s",
+                value: self.time_limit_s.to_string(),
+                reason: "must be > 0",
+            });
         }
         Ok(())
     }
@@ -195,8 +216,12 @@ pub trait QpBackend: Send {
 pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn QpBackend>, QpError> {
     settings.validate()?;
     match name {
-        "clarabel" => Ok(Box::new(crate::clarabel_backend::ClarabelBackend::new(settings.clone()))),
-        "osqp" => Ok(Box::new(crate::osqp_backend::OsqpBackend::new(settings.clone()))),
+        "clarabel" => Ok(Box::new(crate::clarabel_backend::ClarabelBackend::new(
+            settings.clone(),
+        ))),
+        "osqp" => Ok(Box::new(crate::osqp_backend::OsqpBackend::new(
+            settings.clone(),
+        ))),
         "uzawa" => Ok(Box::new(crate::uzawa::UzawaBackend::new(settings.clone()))),
         other => Err(QpError::UnknownBackend(other.to_string())),
     }

@@ -17,6 +17,8 @@
 //! The core library never imports a backend: it talks to [`QpBackend`] only, and the binary
 //! picks one by name with [`backend_from_name`].
 #![warn(missing_docs)]
+// Index loops over several parallel arrays are the clearest form for the sparse kernels here.
+#![allow(clippy::needless_range_loop)]
 
 pub mod backend;
 pub mod clarabel_backend;
@@ -24,5 +26,8 @@ pub mod osqp_backend;
 pub mod qp;
 pub mod uzawa;
 
-pub use backend::{backend_from_name, QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart, BACKEND_NAMES};
+pub use backend::{
+    backend_from_name, QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart,
+    BACKEND_NAMES,
+};
 pub use qp::{CscMatrix, Qp};

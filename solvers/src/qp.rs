@@ -21,19 +21,40 @@ pub struct CscMatrix {
 impl CscMatrix {
     /// An all-zero `nrows × ncols` matrix.
     pub fn zeros(nrows: usize, ncols: usize) -> Self {
-        CscMatrix { nrows, ncols, colptr: vec![0; ncols + 1], rowval: Vec::new(), nzval: Vec::new() }
+        CscMatrix {
+            nrows,
+            ncols,
+            colptr: vec![0; ncols + 1],
+            rowval: Vec::new(),
+            nzval: Vec::new(),
+        }
     }
 
     /// Builds a matrix from `(row, col, value)` triplets; duplicates are summed, explicit zeros
     /// kept (the sparsity pattern then does not depend on values). Errors name the first
     /// out-of-range or non-finite triplet.
-    pub fn from_triplets(nrows: usize, ncols: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, QpError> {
+    pub fn from_triplets(
+        nrows: usize,
+        ncols: usize,
+        triplets: &[(usize, usize, f64)],
+    ) -> Result<Self, QpError> {
         for (k, &(i, j, v)) in triplets.iter().enumerate() {
             if i >= nrows || j >= ncols {
-                return Err(QpError::IndexOutOfRange { what: "triplet", index: k, row: i, col: j, nrows, ncols });
+                return Err(QpError::IndexOutOfRange {
+                    what: "triplet",
+                    index: k,
+                    row: i,
+                    col: j,
+                    nrows,
+                    ncols,
+                });
             }
             if !v.is_finite() {
-                return Err(QpError::NotFinite { what: "matrix triplet", index: k, value: v });
+                return Err(QpError::NotFinite {
+                    what: "matrix triplet",
+                    index: k,
+                    value: v,
+                });
             }
         }
         let mut count = vec![0usize; ncols + 1];
@@ -71,7 +92,13 @@ impl CscMatrix {
             }
             colptr.push(rowval.len());
         }
-        Ok(CscMatrix { nrows, ncols, colptr, rowval, nzval })
+        Ok(CscMatrix {
+            nrows,
+            ncols,
+            colptr,
+            rowval,
+            nzval,
+        })
     }
 
     /// Number of stored entries.
@@ -171,28 +198,51 @@ impl Qp {
         let n = self.q.len();
         let m = self.l.len();
         if self.p.nrows != n || self.p.ncols != n {
-            return Err(QpError::DimensionMismatch { what: "P", expected: (n, n), found: (self.p.nrows, self.p.ncols) });
+            return Err(QpError::DimensionMismatch {
+                what: "P",
+                expected: (n, n),
+                found: (self.p.nrows, self.p.ncols),
+            });
         }
         if self.a.ncols != n || self.a.nrows != m {
-            return Err(QpError::DimensionMismatch { what: "A", expected: (m, n), found: (self.a.nrows, self.a.ncols) });
+            return Err(QpError::DimensionMismatch {
+                what: "A",
+                expected: (m, n),
+                found: (self.a.nrows, self.a.ncols),
+            });
         }
         if self.u.len() != m {
-            return Err(QpError::DimensionMismatch { what: "u", expected: (m, 1), found: (self.u.len(), 1) });
+            return Err(QpError::DimensionMismatch {
+                what: "u",
+                expected: (m, 1),
+                found: (self.u.len(), 1),
+            });
         }
         for (i, v) in self.q.iter().enumerate() {
             if !v.is_finite() {
-                return Err(QpError::NotFinite { what: "q", index: i, value: *v });
+                return Err(QpError::NotFinite {
+                    what: "q",
+                    index: i,
+                    value: *v,
+                });
             }
         }
         for (k, v) in self.p.nzval.iter().chain(self.a.nzval.iter()).enumerate() {
             if !v.is_finite() {
-                return Err(QpError::NotFinite { what: "P or A entry", index: k, value: *v });
+                return Err(QpError::NotFinite {
+                    what: "P or A entry",
+                    index: k,
+                    value: *v,
+                });
             }
         }
         for j in 0..n {
             for p in self.p.colptr[j]..self.p.colptr[j + 1] {
                 if self.p.rowval[p] > j {
-                    return Err(QpError::NotUpperTriangular { row: self.p.rowval[p], col: j });
+                    return Err(QpError::NotUpperTriangular {
+                        row: self.p.rowval[p],
+                        col: j,
+                    });
                 }
             }
         }
@@ -209,7 +259,8 @@ impl Qp {
     pub fn objective(&self, x: &[f64]) -> f64 {
         let mut px = vec![0.0; x.len()];
         self.p.sym_upper_mul_add(1.0, x, &mut px);
-        x.iter().zip(&px).map(|(a, b)| 0.5 * a * b).sum::<f64>() + x.iter().zip(&self.q).map(|(a, b)| a * b).sum::<f64>()
+        x.iter().zip(&px).map(|(a, b)| 0.5 * a * b).sum::<f64>()
+            + x.iter().zip(&self.q).map(|(a, b)| a * b).sum::<f64>()
     }
 
     /// Largest bound violation `max_i max(l_i − (Ax)_i, (Ax)_i − u_i, 0)`.
@@ -237,7 +288,9 @@ mod tests {
 
     #[test]
     fn triplets_sum_duplicates_and_sort() {
-        let m = CscMatrix::from_triplets(3, 2, &[(2, 0, 1.0), (0, 0, 2.0), (2, 0, 3.0), (1, 1, -1.0)]).unwrap();
+        let m =
+            CscMatrix::from_triplets(3, 2, &[(2, 0, 1.0), (0, 0, 2.0), (2, 0, 3.0), (1, 1, -1.0)])
+                .unwrap();
         assert_eq!(m.colptr, vec![0, 2, 3]);
         assert_eq!(m.rowval, vec![0, 2, 1]);
         assert_eq!(m.nzval, vec![2.0, 4.0, -1.0]);

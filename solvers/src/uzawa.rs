@@ -1,7 +1,664 @@
-//! placeholder
-use crate::backend::*;
-/// placeholder
-pub struct UzawaBackend(QpSettings);
-impl UzawaBackend { /// new
- pub fn new(s: QpSettings) -> Self { Self(s) } }
-impl QpBackend for UzawaBackend { fn name(&self) -> &'static str { "uzawa" } fn solve(&mut self, _qp: &crate::Qp, _w: Option<&WarmStart>) -> Result<QpSolution, QpError> { unimplemented!() } }
+//! The paper's sub-problem method: Uzawa's algorithm, i.e. projected gradient ascent on the
+//! dual, accelerated with Nesterov/FISTA momentum and adaptive restart.
+//!
+//! # Internal form
+//!
+//! `P` must be positive definite (the caller adds a proximal term); it is factorized **once per
+//! solve** with a sparse up-looking `LDLᵀ` ([`SparseLdl`], the QDLDL algorithm: elimination
+//! tree, column counts, numeric factorization; natural ordering, which suits the banded-ish
+//! `P` of contactlab). A failed factorization (`P` not positive definite) returns status
+//! `NumericalError`.
+//!
+//! Every QP row is turned into one-sided "contact" rows `c_kᵀ x ≥ d_k`: a finite lower bound
+//! gives `c_k = a_i, d_k = l_i`; a finite upper bound gives `c_k = −a_i, d_k = −u_i` (so a
+//! two-sided row with `l_i < u_i` becomes two rows); an equality row (`l_i = u_i`) gives one row
+//! `c_k = a_i, d_k = l_i` whose multiplier is free; rows infinite on both sides are ignored
+//! (`y_i = 0`). With multipliers `μ` (`μ_k ≥ 0` on inequality rows) the Lagrangian is
+//! `½xᵀPx + qᵀx − μᵀ(Cx − d)`, its minimizer is `x(μ) = P⁻¹(Cᵀμ − q)` and the dual function
+//! `D(μ)` is concave with gradient `d − C x(μ)` and Lipschitz constant `λ_max(C P⁻¹ Cᵀ)`.
+//! The crate dual is `y_i = −Σ_{k from row i} σ_k μ_k` (`σ_k = ±1` the sign of `c_k`), so that
+//! `P x + q + Aᵀ y = 0`.
+//!
+//! # Step rule
+//!
+//! Uzawa with the optimal constant step plus momentum: `μ⁺ = Π(z − (1/L)(C x(z) − d))` where
+//! `Π` clips inequality multipliers at 0, `L = 1.05·λ̂` with `λ̂` from 30 power iterations on
+//! `C P⁻¹ Cᵀ`, and `z = μ⁺ + ((t−1)/t⁺)(μ⁺ − μ)` with `t⁺ = (1 + √(1 + 4t²))/2` (FISTA). The
+//! momentum is reset (`t = 1`, `z = μ⁺`) when the dual value decreases or when the gradient
+//! mapping `μ⁺ − z` makes an obtuse angle with the step `μ⁺ − μ` (O'Donoghue–Candès adaptive
+//! restart). As a safeguard, `L` is doubled whenever a momentum-free step decreases `D` (which
+//! cannot happen with `L ≥ λ_max`). Since `x(·)` is affine, `x(z)` is the same combination of `x(μ⁺)` and `x(μ)`, so an
+//! iteration costs one pair of triangular solves.
+//!
+//! # Stopping test
+//!
+//! Stationarity `P x + q − Cᵀμ = 0` holds by construction. With `s = C x(μ) − d`,
+//! `τ = eps_abs + eps_rel·max(1, ‖d‖∞)`, the solve stops with `Solved` when the primal violation
+//! `max(max_eq |s_k|, max_ineq max(−s_k, 0)) ≤ τ`, the complementarity
+//! `max_ineq |μ_k s_k| ≤ τ·max(1, ‖μ‖∞)` and the duality gap `|f(x) − D(μ)| = |μᵀs| ≤
+//! τ·max(1, |f(x)|)` all hold (the gap test keeps the objective accurate when multipliers are
+//! large).
+//!
+//! # Other statuses
+//!
+//! `PrimalInfeasible` when `‖μ‖∞ > 1e12·max(1, ‖q‖∞)` or when the last step `δ = μ⁺ − μ`,
+//! clipped to `δ_ineq ≥ 0` and normalized, is an approximate Farkas certificate
+//! (`dᵀδ̂ ≥ 1e-6·max(1, ‖d‖∞)` and `‖Cᵀδ̂‖∞·max(1, ‖x‖₁) ≤ 0.1·dᵀδ̂`) for 10 consecutive
+//! iterations; `MaxIterations` at `max_iter` dual steps; `TimeLimit` past `time_limit_s`.
+//! `iterations` counts dual steps; `solve_time_s` is wall time. A [`WarmStart`] `y` of the right
+//! length is converted to the initial `μ`; its `x` is unused (`x` is a function of `μ`). Lengths
+//! are checked as in the other backends (empty = not given, else `n` / `m`).
+
+use crate::backend::{QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart};
+use crate::qp::{CscMatrix, Qp};
+use std::time::Instant;
+
+/// The accelerated Uzawa backend. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct UzawaBackend {
+    settings: QpSettings,
+}
+
+impl UzawaBackend {
+    /// A backend using `settings` (validated at each solve).
+    pub fn new(settings: QpSettings) -> Self {
+        UzawaBackend { settings }
+    }
+}
+
+const NONE: usize = usize::MAX;
+
+/// Sparse `LDLᵀ` factorization of a symmetric matrix given by its upper triangle (QDLDL
+/// algorithm, natural ordering). Used as a Cholesky: it fails unless every pivot is positive.
+#[derive(Clone, Debug)]
+pub struct SparseLdl {
+    n: usize,
+    lp: Vec<usize>,
+    li: Vec<usize>,
+    lx: Vec<f64>,
+    dinv: Vec<f64>,
+}
+
+impl SparseLdl {
+    /// Factorizes the matrix whose upper triangle is `a` (square, CSC, sorted rows). Returns
+    /// `None` when `a` is not square, has an entry below the diagonal, or a pivot is not
+    /// positive (relative to the largest diagonal entry) or not finite.
+    pub fn factor(a: &CscMatrix) -> Option<SparseLdl> {
+        let n = a.ncols;
+        if a.nrows != n {
+            return None;
+        }
+        // Elimination tree and column counts.
+        let mut work = vec![NONE; n];
+        let mut lnz = vec![0usize; n];
+        let mut etree = vec![NONE; n];
+        for j in 0..n {
+            work[j] = j;
+            for p in a.colptr[j]..a.colptr[j + 1] {
+                let mut i = a.rowval[p];
+                if i > j {
+                    return None;
+                }
+                while work[i] != j {
+                    if etree[i] == NONE {
+                        etree[i] = j;
+                    }
+                    lnz[i] += 1;
+                    work[i] = j;
+                    i = etree[i];
+                    if i == NONE {
+                        break;
+                    }
+                }
+            }
+        }
+        let mut lp = vec![0usize; n + 1];
+        for i in 0..n {
+            lp[i + 1] = lp[i] + lnz[i];
+        }
+        let nnz = lp[n];
+        let mut li = vec![0usize; nnz];
+        let mut lx = vec![0.0; nnz];
+        let mut d = vec![0.0; n];
+        let mut dinv = vec![0.0; n];
+        let mut y_markers = vec![false; n];
+        let mut y_idx = vec![0usize; n];
+        let mut elim = vec![0usize; n];
+        let mut next_space = lp[..n].to_vec();
+        let mut y_vals = vec![0.0; n];
+        let max_diag = (0..n)
+            .flat_map(|j| (a.colptr[j]..a.colptr[j + 1]).filter(move |&p| a.rowval[p] == j))
+            .fold(0.0f64, |m, p| m.max(a.nzval[p].abs()));
+        let pivot_tol = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
+        for k in 0..n {
+            let mut nnz_y = 0;
+            d[k] = 0.0;
+            for p in a.colptr[k]..a.colptr[k + 1] {
+                let b = a.rowval[p];
+                if b == k {
+                    d[k] += a.nzval[p];
+                    continue;
+                }
+                y_vals[b] = a.nzval[p];
+                if !y_markers[b] {
+                    y_markers[b] = true;
+                    elim[0] = b;
+                    let mut nnz_e = 1;
+                    let mut next = etree[b];
+                    while next != NONE && next < k {
+                        if y_markers[next] {
+                            break;
+                        }
+                        y_markers[next] = true;
+                        elim[nnz_e] = next;
+                        nnz_e += 1;
+                        next = etree[next];
+                    }
+                    while nnz_e > 0 {
+                        nnz_e -= 1;
+                        y_idx[nnz_y] = elim[nnz_e];
+                        nnz_y += 1;
+                    }
+                }
+            }
+            for i in (0..nnz_y).rev() {
+                let c = y_idx[i];
+                let tmp = next_space[c];
+                let yc = y_vals[c];
+                for j in lp[c]..tmp {
+                    y_vals[li[j]] -= lx[j] * yc;
+                }
+                li[tmp] = k;
+                lx[tmp] = yc * dinv[c];
+                d[k] -= yc * lx[tmp];
+                next_space[c] += 1;
+                y_vals[c] = 0.0;
+                y_markers[c] = false;
+            }
+            if !(d[k].is_finite() && d[k] > pivot_tol) {
+                return None;
+            }
+            dinv[k] = 1.0 / d[k];
+        }
+        Some(SparseLdl {
+            n,
+            lp,
+            li,
+            lx,
+            dinv,
+        })
+    }
+
+    /// Solves `S x = b` in place.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        for i in 0..self.n {
+            let xi = x[i];
+            for j in self.lp[i]..self.lp[i + 1] {
+                x[self.li[j]] -= self.lx[j] * xi;
+            }
+        }
+        for i in 0..self.n {
+            x[i] *= self.dinv[i];
+        }
+        for i in (0..self.n).rev() {
+            let mut s = x[i];
+            for j in self.lp[i]..self.lp[i + 1] {
+                s -= self.lx[j] * x[self.li[j]];
+            }
+            x[i] = s;
+        }
+    }
+}
+
+/// The one-sided rows `C x ≥ d` (equality rows `C x = d`) built from a QP.
+struct Rows {
+    /// Rows of `A` as columns (`Aᵀ`, CSC).
+    at: CscMatrix,
+    /// Original row of each internal row.
+    orig: Vec<usize>,
+    /// Sign `σ_k` with `c_k = σ_k a_i`.
+    sign: Vec<f64>,
+    /// Right-hand side `d_k`.
+    d: Vec<f64>,
+    /// Whether the multiplier is free (equality row).
+    eq: Vec<bool>,
+}
+
+impl Rows {
+    fn new(qp: &Qp) -> Rows {
+        let mut r = Rows {
+            at: qp.a.transpose(),
+            orig: Vec::new(),
+            sign: Vec::new(),
+            d: Vec::new(),
+            eq: Vec::new(),
+        };
+        for i in 0..qp.m() {
+            let (l, u) = (qp.l[i], qp.u[i]);
+            if l == u {
+                r.push(i, 1.0, l, true);
+                continue;
+            }
+            if l.is_finite() {
+                r.push(i, 1.0, l, false);
+            }
+            if u.is_finite() {
+                r.push(i, -1.0, -u, false);
+            }
+        }
+        r
+    }
+
+    fn push(&mut self, i: usize, s: f64, d: f64, eq: bool) {
+        self.orig.push(i);
+        self.sign.push(s);
+        self.d.push(d);
+        self.eq.push(eq);
+    }
+
+    fn len(&self) -> usize {
+        self.d.len()
+    }
+
+    /// `out = C x`.
+    fn mul(&self, x: &[f64], out: &mut [f64]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            let i = self.orig[k];
+            let mut s = 0.0;
+            for p in self.at.colptr[i]..self.at.colptr[i + 1] {
+                s += self.at.nzval[p] * x[self.at.rowval[p]];
+            }
+            *o = self.sign[k] * s;
+        }
+    }
+
+    /// `out += Cᵀ μ`.
+    fn tr_mul_add(&self, mu: &[f64], out: &mut [f64]) {
+        for (k, &m) in mu.iter().enumerate() {
+            if m == 0.0 {
+                continue;
+            }
+            let i = self.orig[k];
+            let v = self.sign[k] * m;
+            for p in self.at.colptr[i]..self.at.colptr[i + 1] {
+                out[self.at.rowval[p]] += self.at.nzval[p] * v;
+            }
+        }
+    }
+
+    /// Projection onto the dual feasible set.
+    fn project(&self, mu: &mut [f64]) {
+        for (m, &e) in mu.iter_mut().zip(&self.eq) {
+            if !e && *m < 0.0 {
+                *m = 0.0;
+            }
+        }
+    }
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl QpBackend for UzawaBackend {
+    fn name(&self) -> &'static str {
+        "uzawa"
+    }
+
+    fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
+        let start = Instant::now();
+        let st = self.settings.clone();
+        st.validate()?;
+        qp.validate()?;
+        let (n, m) = (qp.n(), qp.m());
+        crate::osqp_backend::check_warm(warm, n, m)?;
+        let finish = |x: Vec<f64>, y: Vec<f64>, status: QpStatus, iterations: usize| QpSolution {
+            x,
+            y,
+            status,
+            iterations,
+            solve_time_s: start.elapsed().as_secs_f64(),
+        };
+        let Some(ldl) = SparseLdl::factor(&qp.p) else {
+            return Ok(finish(
+                vec![0.0; n],
+                vec![0.0; m],
+                QpStatus::NumericalError,
+                0,
+            ));
+        };
+        let rows = Rows::new(qp);
+        let mi = rows.len();
+        // x(μ) = P⁻¹(Cᵀμ − q).
+        let x_of = |mu: &[f64], x: &mut [f64]| {
+            for (xi, qi) in x.iter_mut().zip(&qp.q) {
+                *xi = -qi;
+            }
+            rows.tr_mul_add(mu, x);
+            ldl.solve_in_place(x);
+        };
+        let to_y = |mu: &[f64]| {
+            let mut y = vec![0.0; m];
+            for k in 0..mi {
+                y[rows.orig[k]] -= rows.sign[k] * mu[k];
+            }
+            y
+        };
+
+        // Initial multipliers.
+        let mut mu = vec![0.0; mi];
+        if let Some(w) = warm.filter(|w| !w.y.is_empty()) {
+            for k in 0..mi {
+                let yi = w.y[rows.orig[k]];
+                mu[k] = -rows.sign[k] * yi;
+            }
+            rows.project(&mut mu);
+        }
+        let mut x = vec![0.0; n];
+        x_of(&mu, &mut x);
+        if mi == 0 {
+            let y = to_y(&mu);
+            return Ok(finish(x, y, QpStatus::Solved, 0));
+        }
+
+        // Lipschitz constant of the dual gradient: 30 power iterations on C P⁻¹ Cᵀ.
+        let mut v: Vec<f64> = (0..mi)
+            .map(|k| 1.0 + 0.1 * ((k * 7919) % 13) as f64)
+            .collect();
+        let mut w = vec![0.0; n];
+        let mut cv = vec![0.0; mi];
+        let mut lam = 0.0;
+        for _ in 0..30 {
+            let nv = inf_norm(&v).max(f64::MIN_POSITIVE);
+            v.iter_mut().for_each(|e| *e /= nv);
+            w.iter_mut().for_each(|e| *e = 0.0);
+            rows.tr_mul_add(&v, &mut w);
+            ldl.solve_in_place(&mut w);
+            rows.mul(&w, &mut cv);
+            let n2v = dot(&v, &v).sqrt();
+            lam = dot(&cv, &cv).sqrt() / n2v.max(f64::MIN_POSITIVE);
+            if !(lam.is_finite() && lam > 0.0) {
+                break;
+            }
+            std::mem::swap(&mut v, &mut cv);
+        }
+        let mut big_l = if lam.is_finite() && lam > 0.0 {
+            1.05 * lam
+        } else {
+            // Power iteration broke down: fall back to the safe bound trace(C P⁻¹ Cᵀ).
+            let mut tr = 0.0;
+            let mut e = vec![0.0; mi];
+            for k in 0..mi {
+                e[k] = 1.0;
+                w.iter_mut().for_each(|v| *v = 0.0);
+                rows.tr_mul_add(&e, &mut w);
+                let cw = w.clone();
+                ldl.solve_in_place(&mut w);
+                tr += dot(&cw, &w);
+                e[k] = 0.0;
+            }
+            if tr.is_finite() && tr > 0.0 {
+                tr
+            } else {
+                1.0
+            }
+        };
+        let mut step = 1.0 / big_l;
+
+        let d_norm = inf_norm(
+            &rows
+                .d
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect::<Vec<_>>(),
+        );
+        let tol = st.eps_abs + st.eps_rel * d_norm.max(1.0);
+        let q_norm = inf_norm(&qp.q).max(1.0);
+        let cert_tol = 1e-6 * d_norm.max(1.0);
+
+        let mut z = mu.clone();
+        let mut xz = x.clone();
+        let mut t = 1.0f64;
+        let mut s = vec![0.0; mi];
+        let mut mu_new = vec![0.0; mi];
+        let mut x_new = vec![0.0; n];
+        let mut delta = vec![0.0; mi];
+        let mut ctd = vec![0.0; n];
+        // Dual value D(μ) = ½ μᵀd − ½ μᵀ s + ½ qᵀ x with s = C x − d.
+        rows.mul(&x, &mut s);
+        s.iter_mut().zip(&rows.d).for_each(|(a, b)| *a -= b);
+        let mut dual_val = 0.5 * (dot(&mu, &rows.d) - dot(&mu, &s) + dot(&qp.q, &x));
+        let mut cert_count = 0;
+        // Whether z = μ (no momentum) at the current step.
+        let mut plain = true;
+        let mut iterations = 0;
+        let status = loop {
+            if iterations >= st.max_iter {
+                break QpStatus::MaxIterations;
+            }
+            if iterations % 32 == 0 && start.elapsed().as_secs_f64() > st.time_limit_s {
+                break QpStatus::TimeLimit;
+            }
+            iterations += 1;
+            // Gradient step from z.
+            rows.mul(&xz, &mut s);
+            for k in 0..mi {
+                mu_new[k] = z[k] - step * (s[k] - rows.d[k]);
+            }
+            rows.project(&mut mu_new);
+            x_of(&mu_new, &mut x_new);
+            rows.mul(&x_new, &mut s);
+            s.iter_mut().zip(&rows.d).for_each(|(a, b)| *a -= b);
+            if x_new.iter().any(|v| !v.is_finite()) {
+                break QpStatus::NumericalError;
+            }
+
+            // Stopping test at (μ⁺, x(μ⁺)).
+            let mut viol = 0.0f64;
+            let mut comp = 0.0f64;
+            for k in 0..mi {
+                if rows.eq[k] {
+                    viol = viol.max(s[k].abs());
+                } else {
+                    viol = viol.max(-s[k]);
+                    comp = comp.max((mu_new[k] * s[k]).abs());
+                }
+            }
+            let mu_norm = inf_norm(&mu_new);
+            let new_val = 0.5 * (dot(&mu_new, &rows.d) - dot(&mu_new, &s) + dot(&qp.q, &x_new));
+            if iterations % 20000 == 0 {
+                eprintln!("it {iterations} viol {viol:e} comp {comp:e} mu {mu_norm:e} tol {tol:e} L {big_l:e} val {new_val:.15e} mu={mu_new:?}");
+            }
+            // Duality gap f(x(μ)) − D(μ) = μᵀs (stationarity is exact).
+            let gap = dot(&mu_new, &s).abs();
+            let f_val = new_val + dot(&mu_new, &s);
+            if viol <= tol && comp <= tol * mu_norm.max(1.0) && gap <= tol * f_val.abs().max(1.0) {
+                std::mem::swap(&mut mu, &mut mu_new);
+                std::mem::swap(&mut x, &mut x_new);
+                break QpStatus::Solved;
+            }
+
+            // Primal infeasibility: exploding multipliers or a Farkas-like step direction.
+            if mu_norm > 1e12 * q_norm {
+                std::mem::swap(&mut mu, &mut mu_new);
+                std::mem::swap(&mut x, &mut x_new);
+                break QpStatus::PrimalInfeasible;
+            }
+            for k in 0..mi {
+                let dk = mu_new[k] - mu[k];
+                delta[k] = if rows.eq[k] { dk } else { dk.max(0.0) };
+            }
+            let dn = inf_norm(&delta);
+            let mut farkas = false;
+            if dn > 0.0 {
+                delta.iter_mut().for_each(|e| *e /= dn);
+                let dd = dot(&delta, &rows.d);
+                if dd >= cert_tol {
+                    ctd.iter_mut().for_each(|e| *e = 0.0);
+                    rows.tr_mul_add(&delta, &mut ctd);
+                    let x1: f64 = x_new.iter().map(|v| v.abs()).sum();
+                    farkas = inf_norm(&ctd) * x1.max(1.0) <= 0.1 * dd;
+                }
+            }
+            cert_count = if farkas { cert_count + 1 } else { 0 };
+            if cert_count >= 10 {
+                std::mem::swap(&mut mu, &mut mu_new);
+                std::mem::swap(&mut x, &mut x_new);
+                break QpStatus::PrimalInfeasible;
+            }
+
+            // Momentum with adaptive restart.
+            // Decreases at the rounding level of D are ignored.
+            let decreased = dual_val - new_val > 1e-12 * dual_val.abs().max(1.0);
+            if decreased && plain {
+                // A plain projected gradient step with step 1/L ≥ 1/λ_max never decreases D:
+                // the power-iteration estimate was too small.
+                big_l *= 2.0;
+                step = 1.0 / big_l;
+            }
+            let mut restart = decreased;
+            if !restart {
+                let mut g = 0.0;
+                for k in 0..mi {
+                    g += (mu_new[k] - z[k]) * (mu_new[k] - mu[k]);
+                }
+                restart = g < 0.0;
+            }
+            plain = restart;
+            let beta = if restart {
+                t = 1.0;
+                0.0
+            } else {
+                let t_new = 0.5 * (1.0 + (1.0 + 4.0 * t * t).sqrt());
+                let b = (t - 1.0) / t_new;
+                t = t_new;
+                b
+            };
+            for k in 0..mi {
+                z[k] = mu_new[k] + beta * (mu_new[k] - mu[k]);
+            }
+            // x(z) by the same affine combination (z is not projected, as in FISTA).
+            for j in 0..n {
+                xz[j] = x_new[j] + beta * (x_new[j] - x[j]);
+            }
+            std::mem::swap(&mut mu, &mut mu_new);
+            std::mem::swap(&mut x, &mut x_new);
+            dual_val = new_val;
+        };
+        let y = to_y(&mu);
+        Ok(finish(x, y, status, iterations))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small_qp() -> Qp {
+        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
+        let a =
+            CscMatrix::from_triplets(3, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0), (2, 1, 1.0)])
+                .unwrap();
+        Qp {
+            p,
+            q: vec![-1.0, -1.0],
+            a,
+            l: vec![f64::NEG_INFINITY, 0.8, f64::NEG_INFINITY],
+            u: vec![1.0, 5.0, f64::INFINITY],
+        }
+    }
+
+    #[test]
+    fn ldl_solves_a_banded_system() {
+        // Tridiagonal SPD with an extra corner entry.
+        let n = 6;
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push((i, i, 4.0));
+            if i + 1 < n {
+                t.push((i, i + 1, -1.0));
+            }
+        }
+        t.push((0, n - 1, 0.5));
+        let s = CscMatrix::from_triplets(n, n, &t).unwrap();
+        let f = SparseLdl::factor(&s).unwrap();
+        let b: Vec<f64> = (0..n).map(|i| i as f64 - 2.0).collect();
+        let mut x = b.clone();
+        f.solve_in_place(&mut x);
+        let mut r = vec![0.0; n];
+        s.sym_upper_mul_add(1.0, &x, &mut r);
+        for i in 0..n {
+            assert!((r[i] - b[i]).abs() < 1e-12);
+        }
+        // Indefinite → None.
+        let bad = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (0, 1, 2.0), (1, 1, 1.0)]).unwrap();
+        assert!(SparseLdl::factor(&bad).is_none());
+    }
+
+    #[test]
+    fn solves_small_qp_with_crate_dual_signs() {
+        let qp = small_qp();
+        let mut b = UzawaBackend::new(QpSettings::default());
+        let s = b.solve(&qp, None).unwrap();
+        assert_eq!(s.status, QpStatus::Solved);
+        assert!(
+            (s.x[0] - 0.8).abs() < 1e-7 && (s.x[1] - 0.2).abs() < 1e-7,
+            "{:?}",
+            s.x
+        );
+        assert!(qp.dual_residual(&s.x, &s.y) < 1e-9);
+        assert!(s.y[0] > 0.0 && s.y[1] < 0.0 && s.y[2] == 0.0, "{:?}", s.y);
+        // Warm start from the solution converges at once.
+        let w = WarmStart {
+            x: vec![],
+            y: s.y.clone(),
+        };
+        let s2 = b.solve(&qp, Some(&w)).unwrap();
+        assert_eq!(s2.status, QpStatus::Solved);
+        assert!(s2.iterations <= 2, "{}", s2.iterations);
+        let bad = WarmStart {
+            x: vec![],
+            y: vec![0.0],
+        };
+        assert!(matches!(
+            b.solve(&qp, Some(&bad)),
+            Err(QpError::WarmStartLength { what: "y", .. })
+        ));
+    }
+
+    #[test]
+    fn infeasible_and_not_positive_definite() {
+        let mut qp = small_qp();
+        qp.l[2] = 0.3;
+        qp.u[2] = 0.3;
+        qp.l[1] = 0.9;
+        let s = UzawaBackend::new(QpSettings::default())
+            .solve(&qp, None)
+            .unwrap();
+        assert_eq!(s.status, QpStatus::PrimalInfeasible);
+        let mut qp = small_qp();
+        qp.p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0)]).unwrap();
+        let s = UzawaBackend::new(QpSettings::default())
+            .solve(&qp, None)
+            .unwrap();
+        assert_eq!(s.status, QpStatus::NumericalError);
+    }
+
+    #[test]
+    fn iteration_limit_is_a_status() {
+        let qp = small_qp();
+        let st = QpSettings {
+            max_iter: 1,
+            ..QpSettings::default()
+        };
+        let s = UzawaBackend::new(st).solve(&qp, None).unwrap();
+        assert_eq!(s.status, QpStatus::MaxIterations);
+        assert_eq!(s.iterations, 1);
+        assert_eq!((s.x.len(), s.y.len()), (2, 3));
+    }
+}

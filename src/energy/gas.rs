@@ -1,3 +1,311 @@
-//! (in progress)
-/// placeholder
-pub struct GasEnergy;
+//! Enclosed-gas energy of an inflated membrane (Pantz 2008, §7: isothermal perfect gas).
+//!
+//! The membrane vertices `x_0, …, x_{n−1}` (in order from one glued end to the other) and the
+//! support chord `x_{n−1} → x_0` close a polygon of signed area (shoelace formula)
+//!
+//! ```text
+//! V(x) = sign · ½ Σ_{i=0}^{n−1} (x_i y_{i+1} − x_{i+1} y_i),   indices mod n,
+//! ```
+//!
+//! with `sign = ±1` fixed at construction so that `V(x0) > 0`. The gas energy is
+//!
+//! ```text
+//! J(x) = −C ln V(x)     (J = +∞ when V ≤ 0),
+//! ∇J = −C/V ∇V,
+//! ∇²J = C/V² ∇V ∇Vᵀ − C/V ∇²V.
+//! ```
+//!
+//! The first Hessian part is pushed as a [`RankOne`] term (`coef = C/V²`, `w = ∇V`) in both
+//! modes. The second is a sum over the shoelace terms: term `i` couples `(x_i, y_i, x_{i+1},
+//! y_{i+1})` through the 4×4 block `M_i = k S` with `k = −C·sign/(2V)` and
+//! `S = [[0,0,0,1],[0,0,−1,0],[0,−1,0,0],[1,0,0,0]]`. Since `S² = I` its eigenvalues are
+//! `±1`, so `M_i` has eigenvalues `±C/(2V)` and its PSD part is
+//! `(M_i + |M_i|)/2 = (k S + |k| I)/2`, used when `projected = true`.
+
+use super::{Energy, Hessian, RankOne};
+
+const DIM: usize = 2;
+
+/// `−C ln V` for the area `V` enclosed by a membrane polygon closed by its support chord.
+#[derive(Clone, Debug)]
+pub struct GasEnergy {
+    /// Polygon vertices in order (the closing side last → first is the support chord).
+    pub polygon: Vec<usize>,
+    /// Gas constant `C` (amount × temperature), `C > 0`.
+    pub c: f64,
+    /// Orientation `±1` making the reference area positive.
+    pub sign: f64,
+}
+
+impl GasEnergy {
+    /// Builds the energy, choosing `sign` so that the signed area at `x0` is positive
+    /// (`sign = 1` if the raw area is exactly zero).
+    pub fn new(polygon: Vec<usize>, c: f64, x0: &[f64]) -> Self {
+        let mut gas = Self {
+            polygon,
+            c,
+            sign: 1.0,
+        };
+        if gas.area(x0) < 0.0 {
+            gas.sign = -1.0;
+        }
+        gas
+    }
+
+    fn xy(&self, x: &[f64], i: usize) -> (f64, f64) {
+        let v = self.polygon[i % self.polygon.len()];
+        (x[DIM * v], x[DIM * v + 1])
+    }
+
+    /// Signed area `V(x)` (positive in the reference orientation).
+    pub fn area(&self, x: &[f64]) -> f64 {
+        let n = self.polygon.len();
+        let mut s = 0.0;
+        for i in 0..n {
+            let (xi, yi) = self.xy(x, i);
+            let (xj, yj) = self.xy(x, i + 1);
+            s += xi * yj - xj * yi;
+        }
+        self.sign * 0.5 * s
+    }
+
+    /// `∇V(x)` as sparse `(dof, value)` pairs (duplicates summed if a vertex repeats).
+    pub fn area_gradient(&self, x: &[f64]) -> Vec<(usize, f64)> {
+        let n = self.polygon.len();
+        let mut w: Vec<(usize, f64)> = Vec::with_capacity(DIM * n);
+        for i in 0..n {
+            let v = self.polygon[i];
+            let (xp, yp) = self.xy(x, i + n - 1);
+            let (xn, yn) = self.xy(x, i + 1);
+            let gx = self.sign * 0.5 * (yn - yp);
+            let gy = self.sign * 0.5 * (xp - xn);
+            for (dof, val) in [(DIM * v, gx), (DIM * v + 1, gy)] {
+                if let Some(e) = w.iter_mut().find(|e| e.0 == dof) {
+                    e.1 += val;
+                } else {
+                    w.push((dof, val));
+                }
+            }
+        }
+        w
+    }
+}
+
+impl Energy for GasEnergy {
+    fn name(&self) -> &str {
+        "gas"
+    }
+
+    fn value(&self, x: &[f64]) -> f64 {
+        let v = self.area(x);
+        if v > 0.0 {
+            -self.c * v.ln()
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Adds `−C/V ∇V`; adds nothing when `V ≤ 0` (the energy is `+∞` there).
+    fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
+        let v = self.area(x);
+        if v <= 0.0 {
+            return;
+        }
+        for (dof, w) in self.area_gradient(x) {
+            g[dof] -= self.c / v * w;
+        }
+    }
+
+    /// Adds nothing when `V ≤ 0`.
+    fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian) {
+        let v = self.area(x);
+        if v <= 0.0 {
+            return;
+        }
+        h.rank_one.push(RankOne {
+            coef: self.c / (v * v),
+            w: self.area_gradient(x),
+        });
+        let k = -self.c * self.sign / (2.0 * v);
+        let mut m = nalgebra::DMatrix::zeros(2 * DIM, 2 * DIM);
+        // S with S² = I
+        m[(0, 3)] = k;
+        m[(3, 0)] = k;
+        m[(1, 2)] = -k;
+        m[(2, 1)] = -k;
+        if projected {
+            m *= 0.5;
+            for d in 0..2 * DIM {
+                m[(d, d)] = 0.5 * k.abs();
+            }
+        }
+        let n = self.polygon.len();
+        for i in 0..n {
+            let a = self.polygon[i];
+            let b = self.polygon[(i + 1) % n];
+            h.add_block(DIM, &[a, b], &m);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn fd_gradient(e: &dyn Energy, x: &[f64], h: f64) -> Vec<f64> {
+        let mut xp = x.to_vec();
+        (0..x.len())
+            .map(|i| {
+                xp[i] = x[i] + h;
+                let fp = e.value(&xp);
+                xp[i] = x[i] - h;
+                let fm = e.value(&xp);
+                xp[i] = x[i];
+                (fp - fm) / (2.0 * h)
+            })
+            .collect()
+    }
+
+    fn fd_hessian(e: &dyn Energy, x: &[f64], h: f64) -> DMatrix<f64> {
+        let n = x.len();
+        let mut m = DMatrix::zeros(n, n);
+        let mut xp = x.to_vec();
+        for j in 0..n {
+            let mut gp = vec![0.0; n];
+            let mut gm = vec![0.0; n];
+            xp[j] = x[j] + h;
+            e.add_gradient(&xp, &mut gp);
+            xp[j] = x[j] - h;
+            e.add_gradient(&xp, &mut gm);
+            xp[j] = x[j];
+            for i in 0..n {
+                m[(i, j)] = (gp[i] - gm[i]) / (2.0 * h);
+            }
+        }
+        (&m + m.transpose()) * 0.5
+    }
+
+    fn rel(a: &[f64], b: &[f64]) -> f64 {
+        let d: f64 = a
+            .iter()
+            .zip(b)
+            .map(|(u, v)| (u - v).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let s: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        d / s.max(1e-12)
+    }
+
+    /// Perturbed parabola `y = 1 − x²` on `[−1, 1]` with `n` vertices, listed left→right or
+    /// right→left (both orientations), plus an unused extra vertex to check sparsity.
+    fn config(rng: &mut ChaCha8Rng, n: usize, reverse: bool) -> (GasEnergy, Vec<f64>) {
+        let mut x = vec![0.0; 2 * (n + 1)];
+        for v in 0..n {
+            let t = -1.0 + 2.0 * v as f64 / (n - 1) as f64;
+            x[2 * v] = t + rng.gen_range(-0.03..0.03);
+            x[2 * v + 1] = 1.0 - t * t + rng.gen_range(-0.03..0.03);
+        }
+        x[2 * n] = 5.0;
+        x[2 * n + 1] = -3.0;
+        let mut poly: Vec<usize> = (0..n).collect();
+        if reverse {
+            poly.reverse();
+        }
+        let gas = GasEnergy::new(poly, rng.gen_range(0.5..3.0), &x);
+        (gas, x)
+    }
+
+    #[test]
+    fn energy_gas_sign_and_area() {
+        let x = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0];
+        let g = GasEnergy::new(vec![0, 1, 2], 1.0, &x);
+        assert_eq!(g.sign, 1.0);
+        assert!((g.area(&x) - 0.5).abs() < 1e-15);
+        let g = GasEnergy::new(vec![2, 1, 0], 1.0, &x);
+        assert_eq!(g.sign, -1.0);
+        assert!((g.area(&x) - 0.5).abs() < 1e-15);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for rev in [false, true] {
+            let (gas, x) = config(&mut rng, 9, rev);
+            // parabola area 4/3 up to the perturbation and polygon error
+            assert!((gas.area(&x) - 4.0 / 3.0).abs() < 0.2);
+        }
+    }
+
+    #[test]
+    fn energy_gas_gradient_fd() {
+        // central differences, step 1e-6; relative error ≤ 1e-5
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        for k in 0..20 {
+            let (gas, x) = config(&mut rng, 8, k % 2 == 1);
+            let mut g = vec![0.0; x.len()];
+            gas.add_gradient(&x, &mut g);
+            let gf = fd_gradient(&gas, &x, 1e-6);
+            assert!(rel(&g, &gf) <= 1e-5, "rel {}", rel(&g, &gf));
+            // area gradient on its own
+            let v0 = gas.area(&x);
+            let mut xp = x.clone();
+            for (dof, w) in gas.area_gradient(&x) {
+                xp[dof] += 1e-6;
+                let vp = gas.area(&xp);
+                xp[dof] = x[dof] - 1e-6;
+                let vm = gas.area(&xp);
+                xp[dof] = x[dof];
+                assert!(((vp - vm) / 2e-6 - w).abs() <= 1e-8, "{v0}");
+            }
+        }
+    }
+
+    #[test]
+    fn energy_gas_hessian_fd_and_projection_psd() {
+        // central differences of the gradient, step 1e-6; relative error ≤ 1e-5
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for k in 0..20 {
+            let (gas, x) = config(&mut rng, 8, k % 2 == 1);
+            let n = x.len();
+            let mut h = Hessian::default();
+            gas.add_hessian(&x, false, &mut h);
+            assert_eq!(h.rank_one.len(), 1);
+            assert!(h.rank_one[0].coef >= 0.0);
+            let hd = h.to_dense(n);
+            let hf = fd_hessian(&gas, &x, 1e-6);
+            let r = rel(hd.as_slice(), hf.as_slice());
+            assert!(r <= 1e-5, "rel {r}");
+            let mut hp = Hessian::default();
+            gas.add_hessian(&x, true, &mut hp);
+            assert_eq!(hp.rank_one, h.rank_one);
+            let hpd = hp.to_dense(n);
+            assert!((&hpd - hpd.transpose()).norm() <= 1e-14 * hpd.norm());
+            let scale = hpd.norm().max(1.0);
+            let ev = hpd.symmetric_eigenvalues();
+            assert!(ev.min() >= -1e-10 * scale, "min eig {}", ev.min());
+            // the sparse part alone is PSD too
+            let sp = Hessian {
+                triplets: hp.triplets.clone(),
+                rank_one: vec![],
+            };
+            let ev = sp.to_dense(n).symmetric_eigenvalues();
+            assert!(ev.min() >= -1e-10 * scale);
+            // the unused vertex has no entries
+            assert!(hp.triplets.iter().all(|t| t.0 < 2 * 8 && t.1 < 2 * 8));
+        }
+    }
+
+    #[test]
+    fn energy_gas_nonpositive_area_is_infinite() {
+        let x0 = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0];
+        let g = GasEnergy::new(vec![0, 1, 2], 1.0, &x0);
+        // flip: negative area
+        let x = [0.0, 0.0, 1.0, 0.0, 1.0, -1.0];
+        assert!(g.area(&x) < 0.0);
+        assert_eq!(g.value(&x), f64::INFINITY);
+        // degenerate: zero area
+        let x = [0.0, 0.0, 1.0, 0.0, 2.0, 0.0];
+        assert_eq!(g.value(&x), f64::INFINITY);
+        assert!(g.value(&x0).is_finite());
+        assert!((g.value(&x0) - 2f64.ln()).abs() < 1e-15);
+    }
+}

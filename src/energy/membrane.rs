@@ -1,3 +1,258 @@
-//! (in progress)
-/// placeholder
-pub struct MembraneEnergy;
+//! Membrane (string) energy of a P1 curve, tension only (Pantz 2008, §7).
+//!
+//! The stored energy density is
+//!
+//! ```text
+//! W(F) = μ (|F|² − 1)²   if |F| ≥ 1,      W(F) = 0   otherwise,
+//! ```
+//!
+//! so the membrane resists stretching but not compression (it may wrinkle freely). On an edge
+//! `(x0, x1)` with reference length `L`, `F = e / L` with `e = x1 − x0`, and the edge contributes
+//! `L · W(F)`. With `s = |e|²/L² − 1`:
+//!
+//! ```text
+//! J_e = μ L s²            (s ≥ 0),
+//! ∂J_e/∂x1 = −∂J_e/∂x0 = 4μ s e / L,
+//! H = 4μ/L (s I + 2 e eᵀ / L²),   Hessian block [[H, −H], [−H, H]].
+//! ```
+//!
+//! `W` is C¹ at `|F| = 1` (and C² from the left only as far as the value `0` goes); for
+//! `|F| > 1`, `s > 0` and `H` is positive definite, and it is `0` for `|F| < 1`, so the exact
+//! Hessian is already positive semi-definite: `projected` changes nothing.
+
+use super::{Energy, Hessian};
+
+/// Tension-only membrane energy of a set of edges (2D).
+#[derive(Clone, Debug)]
+pub struct MembraneEnergy {
+    /// Edges `[v0, v1]`.
+    pub edges: Vec<[usize; 2]>,
+    /// Reference length of each edge.
+    pub rest_length: Vec<f64>,
+    /// Stiffness `μ`.
+    pub mu: f64,
+}
+
+const DIM: usize = 2;
+
+impl MembraneEnergy {
+    /// Builds the energy, taking rest lengths from the reference positions `x_ref` (flat, 2D).
+    pub fn new(edges: Vec<[usize; 2]>, x_ref: &[f64], mu: f64) -> Self {
+        let rest_length = edges
+            .iter()
+            .map(|&[a, b]| {
+                let dx = x_ref[DIM * b] - x_ref[DIM * a];
+                let dy = x_ref[DIM * b + 1] - x_ref[DIM * a + 1];
+                dx.hypot(dy)
+            })
+            .collect();
+        Self {
+            edges,
+            rest_length,
+            mu,
+        }
+    }
+
+    /// `(e, s)` for edge `k`: `e = x1 − x0`, `s = |e|²/L² − 1`.
+    fn edge_state(&self, x: &[f64], k: usize) -> ([f64; 2], f64) {
+        let [a, b] = self.edges[k];
+        let l = self.rest_length[k];
+        let e = [x[DIM * b] - x[DIM * a], x[DIM * b + 1] - x[DIM * a + 1]];
+        let s = (e[0] * e[0] + e[1] * e[1]) / (l * l) - 1.0;
+        (e, s)
+    }
+}
+
+impl Energy for MembraneEnergy {
+    fn name(&self) -> &str {
+        "membrane"
+    }
+
+    fn value(&self, x: &[f64]) -> f64 {
+        (0..self.edges.len())
+            .map(|k| {
+                let (_, s) = self.edge_state(x, k);
+                if s > 0.0 {
+                    self.mu * self.rest_length[k] * s * s
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    }
+
+    fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
+        for k in 0..self.edges.len() {
+            let (e, s) = self.edge_state(x, k);
+            if s <= 0.0 {
+                continue;
+            }
+            let [a, b] = self.edges[k];
+            let c = 4.0 * self.mu * s / self.rest_length[k];
+            for i in 0..DIM {
+                g[DIM * b + i] += c * e[i];
+                g[DIM * a + i] -= c * e[i];
+            }
+        }
+    }
+
+    /// Exact Hessian; it is already positive semi-definite, so `projected` is ignored.
+    fn add_hessian(&self, x: &[f64], _projected: bool, h: &mut Hessian) {
+        for k in 0..self.edges.len() {
+            let (e, s) = self.edge_state(x, k);
+            if s <= 0.0 {
+                continue;
+            }
+            let [a, b] = self.edges[k];
+            let l = self.rest_length[k];
+            let c = 4.0 * self.mu / l;
+            let mut m = nalgebra::DMatrix::zeros(2 * DIM, 2 * DIM);
+            for i in 0..DIM {
+                for j in 0..DIM {
+                    let hij = c * (if i == j { s } else { 0.0 } + 2.0 * e[i] * e[j] / (l * l));
+                    m[(i, j)] = hij;
+                    m[(DIM + i, DIM + j)] = hij;
+                    m[(i, DIM + j)] = -hij;
+                    m[(DIM + i, j)] = -hij;
+                }
+            }
+            h.add_block(DIM, &[a, b], &m);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Central-difference gradient (step `h`).
+    fn fd_gradient(e: &dyn Energy, x: &[f64], h: f64) -> Vec<f64> {
+        let mut xp = x.to_vec();
+        (0..x.len())
+            .map(|i| {
+                xp[i] = x[i] + h;
+                let fp = e.value(&xp);
+                xp[i] = x[i] - h;
+                let fm = e.value(&xp);
+                xp[i] = x[i];
+                (fp - fm) / (2.0 * h)
+            })
+            .collect()
+    }
+
+    /// Central differences of the gradient (step `h`), symmetrized.
+    fn fd_hessian(e: &dyn Energy, x: &[f64], h: f64) -> DMatrix<f64> {
+        let n = x.len();
+        let mut m = DMatrix::zeros(n, n);
+        let mut xp = x.to_vec();
+        for j in 0..n {
+            let mut gp = vec![0.0; n];
+            let mut gm = vec![0.0; n];
+            xp[j] = x[j] + h;
+            e.add_gradient(&xp, &mut gp);
+            xp[j] = x[j] - h;
+            e.add_gradient(&xp, &mut gm);
+            xp[j] = x[j];
+            for i in 0..n {
+                m[(i, j)] = (gp[i] - gm[i]) / (2.0 * h);
+            }
+        }
+        (&m + m.transpose()) * 0.5
+    }
+
+    fn rel(a: &[f64], b: &[f64]) -> f64 {
+        let d: f64 = a
+            .iter()
+            .zip(b)
+            .map(|(u, v)| (u - v).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let s: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        d / s.max(1e-12)
+    }
+
+    /// A polyline of `n` vertices on the x axis (reference), then stretched/compressed edge by
+    /// edge with factors away from 1 (alternating > 1.15 and < 0.85), plus random rotation.
+    fn config(rng: &mut ChaCha8Rng, n: usize) -> (MembraneEnergy, Vec<f64>) {
+        let mut xr = vec![0.0; 2 * n];
+        for v in 0..n {
+            xr[2 * v] = v as f64 * 0.3 + rng.gen_range(0.0..0.1);
+            xr[2 * v + 1] = rng.gen_range(-0.05..0.05);
+        }
+        let edges: Vec<[usize; 2]> = (0..n - 1).map(|v| [v, v + 1]).collect();
+        let m = MembraneEnergy::new(edges, &xr, 2.5);
+        let mut x = vec![0.0; 2 * n];
+        x[0] = rng.gen_range(-1.0..1.0);
+        x[1] = rng.gen_range(-1.0..1.0);
+        for k in 0..n - 1 {
+            let f = if k % 2 == 0 {
+                rng.gen_range(1.15..1.6)
+            } else {
+                rng.gen_range(0.3..0.85)
+            };
+            let th: f64 = rng.gen_range(-3.0..3.0);
+            let l = m.rest_length[k] * f;
+            x[2 * (k + 1)] = x[2 * k] + l * th.cos();
+            x[2 * (k + 1) + 1] = x[2 * k + 1] + l * th.sin();
+        }
+        (m, x)
+    }
+
+    #[test]
+    fn energy_membrane_gradient_fd() {
+        // central differences, step 1e-6; relative error ≤ 1e-5
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        for _ in 0..20 {
+            let (m, x) = config(&mut rng, 7);
+            assert!(m.value(&x) > 0.0);
+            let mut g = vec![0.0; x.len()];
+            m.add_gradient(&x, &mut g);
+            let gf = fd_gradient(&m, &x, 1e-6);
+            assert!(rel(&g, &gf) <= 1e-5, "rel {}", rel(&g, &gf));
+        }
+    }
+
+    #[test]
+    fn energy_membrane_hessian_fd_and_psd() {
+        // central differences of the gradient, step 1e-6; relative error ≤ 1e-5
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        for _ in 0..20 {
+            let (m, x) = config(&mut rng, 7);
+            let n = x.len();
+            let mut h = Hessian::default();
+            m.add_hessian(&x, false, &mut h);
+            let hd = h.to_dense(n);
+            let hf = fd_hessian(&m, &x, 1e-6);
+            let r = rel(hd.as_slice(), hf.as_slice());
+            assert!(r <= 1e-5, "rel {r}");
+            let mut hp = Hessian::default();
+            m.add_hessian(&x, true, &mut hp);
+            let hpd = hp.to_dense(n);
+            assert_eq!(hpd, hd, "projected must equal exact (already PSD)");
+            let ev = hd.symmetric_eigenvalues();
+            let scale = hd.norm().max(1.0);
+            assert!(ev.min() >= -1e-10 * scale, "min eig {}", ev.min());
+        }
+    }
+
+    #[test]
+    fn energy_membrane_compressed_is_zero() {
+        let xr = [0.0, 0.0, 1.0, 0.0];
+        let m = MembraneEnergy::new(vec![[0, 1]], &xr, 1.0);
+        assert!((m.rest_length[0] - 1.0).abs() < 1e-15);
+        let x = [0.0, 0.0, 0.5, 0.2];
+        assert_eq!(m.value(&x), 0.0);
+        let mut g = vec![0.0; 4];
+        m.add_gradient(&x, &mut g);
+        assert_eq!(g, vec![0.0; 4]);
+        let mut h = Hessian::default();
+        m.add_hessian(&x, true, &mut h);
+        assert!(h.triplets.is_empty());
+        // stretched by 2: s = 3, J = μ L s² = 9
+        let x = [0.0, 0.0, 2.0, 0.0];
+        assert!((m.value(&x) - 9.0).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,494 @@
+//! VTK XML writers: `.vtu` unstructured grids (ASCII) and `.pvd` time series
+//! collections, readable by ParaView and by Python `meshio`.
+
+use std::fmt::Write as _;
+use std::io;
+use std::path::Path;
+
+use super::write_atomic;
+
+/// VTK cell type id of a two-node line.
+pub const VTK_LINE: u8 = 3;
+/// VTK cell type id of a three-node triangle.
+pub const VTK_TRIANGLE: u8 = 5;
+/// Value of the `kind` cell array for edges.
+pub const KIND_EDGE: i32 = 1;
+/// Value of the `kind` cell array for triangles.
+pub const KIND_TRIANGLE: i32 = 2;
+
+fn invalid(msg: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, msg)
+}
+
+/// Escapes a string for use inside a double-quoted XML attribute.
+pub(crate) fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Formats a float so that VTK, ParaView and numpy all parse it back exactly
+/// (shortest round-trip representation in scientific notation).
+fn fmt_f64(v: f64) -> String {
+    if v.is_nan() {
+        "nan".to_string()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf" } else { "-inf" }.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Renders the `.vtu` document (see [`write_vtu`]) as a string.
+///
+/// Errors (`InvalidInput`) if `dim` is not 2 or 3, if `x.len()` is not a
+/// multiple of `dim`, if a cell references a non-existent point, or if a point
+/// data array does not have one value per point.
+pub fn vtu_string(
+    dim: usize,
+    x: &[f64],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    point_data: &[(&str, &[f64])],
+) -> io::Result<String> {
+    if dim != 2 && dim != 3 {
+        return Err(invalid(format!("write_vtu: dim must be 2 or 3, got {dim}")));
+    }
+    if !x.len().is_multiple_of(dim) {
+        return Err(invalid(format!(
+            "write_vtu: x.len() = {} is not a multiple of dim = {dim}",
+            x.len()
+        )));
+    }
+    let n_points = x.len() / dim;
+    let n_cells = edges.len() + triangles.len();
+    for (k, e) in edges.iter().enumerate() {
+        if e.iter().any(|&i| i >= n_points) {
+            return Err(invalid(format!(
+                "write_vtu: edge {k} = {e:?} references a point >= {n_points}"
+            )));
+        }
+    }
+    for (k, t) in triangles.iter().enumerate() {
+        if t.iter().any(|&i| i >= n_points) {
+            return Err(invalid(format!(
+                "write_vtu: triangle {k} = {t:?} references a point >= {n_points}"
+            )));
+        }
+    }
+    for (name, vals) in point_data {
+        if vals.len() != n_points {
+            return Err(invalid(format!(
+                "write_vtu: point data '{name}' has {} values, expected {n_points}",
+                vals.len()
+            )));
+        }
+    }
+
+    let mut s = String::new();
+    // `write!` into a String cannot fail; the results are ignored below.
+    s.push_str("<?xml version=\"1.0\"?>\n");
+    s.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n");
+    s.push_str("  <UnstructuredGrid>\n");
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
+    );
+
+    // Point data.
+    if point_data.is_empty() {
+        s.push_str("      <PointData>\n      </PointData>\n");
+    } else {
+        let _ = writeln!(
+            s,
+            "      <PointData Scalars=\"{}\">",
+            xml_escape(point_data[0].0)
+        );
+        for (name, vals) in point_data {
+            let _ = writeln!(
+                s,
+                "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"1\" format=\"ascii\">",
+                xml_escape(name)
+            );
+            push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
+            s.push_str("        </DataArray>\n");
+        }
+        s.push_str("      </PointData>\n");
+    }
+
+    // Cell data: kind.
+    s.push_str("      <CellData Scalars=\"kind\">\n");
+    s.push_str(
+        "        <DataArray type=\"Int32\" Name=\"kind\" NumberOfComponents=\"1\" format=\"ascii\">\n",
+    );
+    push_values(
+        &mut s,
+        std::iter::repeat_n(KIND_EDGE, edges.len())
+            .chain(std::iter::repeat_n(KIND_TRIANGLE, triangles.len()))
+            .map(|k| k.to_string()),
+        20,
+    );
+    s.push_str("        </DataArray>\n");
+    s.push_str("      </CellData>\n");
+
+    // Points (always 3 components).
+    s.push_str("      <Points>\n");
+    s.push_str(
+        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+    );
+    for p in x.chunks_exact(dim) {
+        let z = if dim == 3 { p[2] } else { 0.0 };
+        let _ = writeln!(
+            s,
+            "          {} {} {}",
+            fmt_f64(p[0]),
+            fmt_f64(p[1]),
+            fmt_f64(z)
+        );
+    }
+    s.push_str("        </DataArray>\n");
+    s.push_str("      </Points>\n");
+
+    // Cells.
+    s.push_str("      <Cells>\n");
+    s.push_str("        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+    for e in edges {
+        let _ = writeln!(s, "          {} {}", e[0], e[1]);
+    }
+    for t in triangles {
+        let _ = writeln!(s, "          {} {} {}", t[0], t[1], t[2]);
+    }
+    s.push_str("        </DataArray>\n");
+    s.push_str("        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+    let offsets = (1..=edges.len())
+        .map(|k| 2 * k)
+        .chain((1..=triangles.len()).map(|k| 2 * edges.len() + 3 * k));
+    push_values(&mut s, offsets.map(|o| o.to_string()), 20);
+    s.push_str("        </DataArray>\n");
+    s.push_str("        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    push_values(
+        &mut s,
+        std::iter::repeat_n(VTK_LINE, edges.len())
+            .chain(std::iter::repeat_n(VTK_TRIANGLE, triangles.len()))
+            .map(|t| t.to_string()),
+        20,
+    );
+    s.push_str("        </DataArray>\n");
+    s.push_str("      </Cells>\n");
+
+    s.push_str("    </Piece>\n");
+    s.push_str("  </UnstructuredGrid>\n");
+    s.push_str("</VTKFile>\n");
+    Ok(s)
+}
+
+/// Appends whitespace-separated values, `per_line` per line, indented.
+fn push_values(s: &mut String, vals: impl Iterator<Item = String>, per_line: usize) {
+    let mut count = 0usize;
+    for v in vals {
+        if count.is_multiple_of(per_line) {
+            if count > 0 {
+                s.push('\n');
+            }
+            s.push_str("          ");
+        } else {
+            s.push(' ');
+        }
+        s.push_str(&v);
+        count += 1;
+    }
+    if count > 0 {
+        s.push('\n');
+    }
+}
+
+/// Writes a VTK XML UnstructuredGrid file (`.vtu`, ASCII, version 0.1,
+/// LittleEndian) atomically.
+///
+/// * `dim` — 2 or 3; `x` holds the point coordinates flat
+///   (`x[dim*i + c]`). Points are always written with 3 coordinates
+///   (`z = 0` in 2D).
+/// * `edges` become `VTK_LINE` (3) cells, then `triangles` become
+///   `VTK_TRIANGLE` (5) cells, in that order.
+/// * A cell data `Int32` array `kind` holds [`KIND_EDGE`] (1) for edges and
+///   [`KIND_TRIANGLE`] (2) for triangles.
+/// * `point_data` holds optional scalar `Float64` point arrays `(name, values)`
+///   with one value per point.
+///
+/// Errors as [`vtu_string`] for inconsistent input, or with the I/O error.
+pub fn write_vtu(
+    path: &Path,
+    dim: usize,
+    x: &[f64],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    point_data: &[(&str, &[f64])],
+) -> io::Result<()> {
+    let s = vtu_string(dim, x, edges, triangles, point_data)?;
+    write_atomic(path, s.as_bytes())
+}
+
+/// A ParaView `.pvd` collection: a time series of data files.
+///
+/// Push one `(time, file)` entry per frame (the file name is relative to the
+/// directory of the `.pvd`) and call [`PvdSeries::write`]; rewriting the
+/// `.pvd` after every frame is fine (it is written atomically).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PvdSeries {
+    /// `(time, file name relative to the .pvd)` entries, in push order.
+    pub entries: Vec<(f64, String)>,
+}
+
+impl PvdSeries {
+    /// An empty series.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Appends a frame at `time` stored in `file` (relative to the `.pvd`).
+    pub fn push(&mut self, time: f64, file: impl Into<String>) {
+        self.entries.push((time, file.into()));
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// True when no frame was pushed.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Renders the `.pvd` document.
+    pub fn to_xml(&self) -> String {
+        let mut s = String::new();
+        s.push_str("<?xml version=\"1.0\"?>\n");
+        s.push_str("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n");
+        s.push_str("  <Collection>\n");
+        for (t, f) in &self.entries {
+            let _ = writeln!(
+                s,
+                "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",
+                fmt_f64(*t),
+                xml_escape(f)
+            );
+        }
+        s.push_str("  </Collection>\n");
+        s.push_str("</VTKFile>\n");
+        s
+    }
+
+    /// Writes the `.pvd` collection to `path` atomically.
+    pub fn write(&self, path: &Path) -> io::Result<()> {
+        write_atomic(path, self.to_xml().as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+    use std::process::Command;
+
+    fn tmp_dir(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("contactlab_vtk_{tag}_{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Returns the whitespace-separated tokens of the DataArray named `name`.
+    fn data_array(text: &str, name: &str) -> Vec<String> {
+        let key = format!("Name=\"{name}\"");
+        let start = text.find(&key).unwrap_or_else(|| panic!("no array {name}"));
+        let open_end = start + text[start..].find('>').unwrap() + 1;
+        let close = open_end + text[open_end..].find("</DataArray>").unwrap();
+        text[open_end..close]
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// Unit square split into two triangles, with its 4 boundary edges.
+    fn square() -> (Vec<f64>, Vec<[usize; 2]>, Vec<[usize; 3]>) {
+        let x = vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
+        let edges = vec![[0, 1], [1, 2], [2, 3], [3, 0]];
+        let tris = vec![[0, 1, 2], [0, 2, 3]];
+        (x, edges, tris)
+    }
+
+    #[test]
+    fn vtu_is_consistent() {
+        let (x, edges, tris) = square();
+        let u = [0.0, 0.5, 1.0, 1e-30];
+        let dir = tmp_dir("consistent");
+        let path = dir.join("mesh.vtu");
+        write_vtu(&path, 2, &x, &edges, &tris, &[("u", &u)]).unwrap();
+        assert!(!dir.join("mesh.vtu.tmp").exists());
+        let text = std::fs::read_to_string(&path).unwrap();
+
+        assert!(text.starts_with("<?xml"));
+        assert!(text.contains(
+            "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">"
+        ));
+        assert!(text.contains("NumberOfPoints=\"4\""));
+        assert!(text.contains("NumberOfCells=\"6\""));
+        assert!(text.trim_end().ends_with("</VTKFile>"));
+        for tag in [
+            "VTKFile",
+            "UnstructuredGrid",
+            "Piece",
+            "PointData",
+            "CellData",
+            "Points",
+            "Cells",
+        ] {
+            assert_eq!(
+                text.matches(&format!("<{tag}")).count(),
+                text.matches(&format!("</{tag}>")).count(),
+                "unbalanced {tag}"
+            );
+        }
+        assert_eq!(
+            text.matches("<DataArray").count(),
+            text.matches("</DataArray>").count()
+        );
+
+        let pts: Vec<f64> = data_array(&text, "Points")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(pts.len(), 12);
+        for i in 0..4 {
+            assert_eq!(pts[3 * i], x[2 * i]);
+            assert_eq!(pts[3 * i + 1], x[2 * i + 1]);
+            assert_eq!(pts[3 * i + 2], 0.0);
+        }
+
+        let conn: Vec<usize> = data_array(&text, "connectivity")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let offs: Vec<usize> = data_array(&text, "offsets")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let types: Vec<u8> = data_array(&text, "types")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let kind: Vec<i32> = data_array(&text, "kind")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(offs.len(), 6);
+        assert_eq!(types, vec![3, 3, 3, 3, 5, 5]);
+        assert_eq!(kind, vec![1, 1, 1, 1, 2, 2]);
+        assert_eq!(*offs.last().unwrap(), conn.len());
+        let mut prev = 0;
+        for (c, (&o, &t)) in offs.iter().zip(&types).enumerate() {
+            let nverts = match t {
+                3 => 2,
+                5 => 3,
+                _ => unreachable!(),
+            };
+            assert_eq!(o - prev, nverts, "cell {c}");
+            prev = o;
+        }
+        assert_eq!(conn, vec![0, 1, 1, 2, 2, 3, 3, 0, 0, 1, 2, 0, 2, 3]);
+        assert!(conn.iter().all(|&i| i < 4));
+
+        let uu: Vec<f64> = data_array(&text, "u")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(uu, u.to_vec());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn vtu_rejects_bad_input() {
+        let (x, edges, tris) = square();
+        assert!(vtu_string(4, &x, &edges, &tris, &[]).is_err());
+        assert!(vtu_string(3, &x[..7], &edges, &tris, &[]).is_err());
+        assert!(vtu_string(2, &x, &[[0, 4]], &[], &[]).is_err());
+        assert!(vtu_string(2, &x, &[], &[[0, 1, 9]], &[]).is_err());
+        assert!(vtu_string(2, &x, &edges, &tris, &[("u", &[1.0])]).is_err());
+        // Empty mesh is fine.
+        let s = vtu_string(2, &[], &[], &[], &[]).unwrap();
+        assert!(s.contains("NumberOfPoints=\"0\" NumberOfCells=\"0\""));
+    }
+
+    #[test]
+    fn pvd_lists_frames() {
+        let dir = tmp_dir("pvd");
+        let mut pvd = PvdSeries::new();
+        assert!(pvd.is_empty());
+        pvd.push(0.0, "frame_0000.vtu");
+        pvd.write(&dir.join("series.pvd")).unwrap();
+        pvd.push(1.5, "frame_0001.vtu");
+        pvd.write(&dir.join("series.pvd")).unwrap();
+        let text = std::fs::read_to_string(dir.join("series.pvd")).unwrap();
+        assert!(text.contains("type=\"Collection\""));
+        assert_eq!(text.matches("<DataSet").count(), 2);
+        assert!(text.contains("file=\"frame_0001.vtu\""));
+        assert!(text.contains("timestep=\"1.5e0\""));
+        assert!(!dir.join("series.pvd.tmp").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn meshio_available() -> bool {
+        Command::new("python3")
+            .args(["-c", "import meshio"])
+            .output()
+            .map(|o| o.status.success())
+            .unwrap_or(false)
+    }
+
+    /// Reads the file back with Python `meshio` when it is importable;
+    /// otherwise prints "meshio not installed, skipped".
+    #[test]
+    fn vtu_readable_by_meshio() {
+        if !meshio_available() {
+            println!("meshio not installed, skipped");
+            return;
+        }
+        let (x, edges, tris) = square();
+        let u = [1.0, 2.0, 3.0, 4.0];
+        let dir = tmp_dir("meshio");
+        let path = dir.join("mesh.vtu");
+        write_vtu(&path, 2, &x, &edges, &tris, &[("u", &u), ("v", &u)]).unwrap();
+        let script = r#"
+import sys, meshio
+m = meshio.read(sys.argv[1])
+counts = {b.type: len(b.data) for b in m.cells}
+print(len(m.points), counts.get("line", 0), counts.get("triangle", 0),
+      sorted(m.point_data.keys()), int(sum(int(k.sum()) for k in m.cell_data["kind"])),
+      float(m.point_data["u"].sum()))
+"#;
+        let out = Command::new("python3")
+            .arg("-c")
+            .arg(script)
+            .arg(&path)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "meshio failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // 4 points, 4 lines, 2 triangles, kind sum = 4*1 + 2*2 = 8, u sum = 10.
+        assert_eq!(stdout.trim(), "4 4 2 ['u', 'v'] 8 10.0", "got {stdout}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,300 @@
+//! The balloons scene of §7 (Figure 2), as fixed by SPEC §4.
+//!
+//! Box `[-1,1]²`, its boundary a fixed closed polyline. On each wall, centred, a support
+//! segment of length 1.6; a membrane (reference length 1.6, `n` uniform P1 edges,
+//! `h = 1.6/n`) is glued to the box at the support's ends (shared vertices). Energy
+//! `I = Σ_i ∫ W(ψ̇_i) − C_i ln V_i`, `W(F) = μ(|F|²−1)²` for `|F| ≥ 1`, 0 otherwise; `V_i` the
+//! area between membrane i and its support (shoelace). Defaults `μ = 1`, `C = 50`, `ε = h/10`,
+//! initial shape a parabola of height 0.2 above the support.
+//!
+//! Balloon 0 sits on the bottom wall, 1 on the right, 2 on the top, 3 on the left; the
+//! opposite pairs are (0, 2) and (1, 3).
+
+use super::Scene;
+use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
+use crate::mesh::{Body, BodyKind, Mesh};
+use thiserror::Error;
+
+/// Parameters of the balloons scene.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BalloonsParams {
+    /// Elements per membrane.
+    pub n: usize,
+    /// Gas constant C (before perturbation).
+    pub c: f64,
+    /// Elasticity coefficient μ.
+    pub mu: f64,
+    /// ε; `None` means h/10.
+    pub eps: Option<f64>,
+    /// Relative perturbation of each `C_i`: `C_i = C (1 + perturb[i])`.
+    pub perturb: [f64; 4],
+    /// Initial parabola height of each balloon.
+    pub heights: [f64; 4],
+}
+
+impl Default for BalloonsParams {
+    fn default() -> Self {
+        BalloonsParams {
+            n: 40,
+            c: 50.0,
+            mu: 1.0,
+            eps: None,
+            perturb: [0.0; 4],
+            heights: [0.2; 4],
+        }
+    }
+}
+
+/// A parameter out of range; names it.
+#[derive(Debug, Error, PartialEq)]
+pub enum BalloonsError {
+    /// The parameter and why it is rejected.
+    #[error("balloons: invalid {name} = {value}: {reason}")]
+    Invalid {
+        /// Parameter name.
+        name: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// Why.
+        reason: &'static str,
+    },
+}
+
+impl BalloonsParams {
+    /// Checks every parameter.
+    pub fn validate(&self) -> Result<(), BalloonsError> {
+        let bad = |name, value: String, reason| {
+            Err(BalloonsError::Invalid {
+                name,
+                value,
+                reason,
+            })
+        };
+        if self.n < 2 {
+            return bad(
+                "n",
+                self.n.to_string(),
+                "need at least 2 elements per membrane",
+            );
+        }
+        if !(self.c > 0.0 && self.c.is_finite()) {
+            return bad("c", self.c.to_string(), "must be finite and > 0");
+        }
+        if !(self.mu > 0.0 && self.mu.is_finite()) {
+            return bad("mu", self.mu.to_string(), "must be finite and > 0");
+        }
+        if let Some(e) = self.eps {
+            if !(e > 0.0 && e.is_finite()) {
+                return bad("eps", e.to_string(), "must be finite and > 0");
+            }
+        }
+        for (i, p) in self.perturb.iter().enumerate() {
+            if !(p.is_finite() && *p > -1.0) {
+                return bad(
+                    "perturb",
+                    format!("{p} (balloon {i})"),
+                    "must be finite and > -1",
+                );
+            }
+        }
+        for (i, hgt) in self.heights.iter().enumerate() {
+            if !(hgt.is_finite() && *hgt > 0.0 && *hgt < 2.0) {
+                return bad(
+                    "heights",
+                    format!("{hgt} (balloon {i})"),
+                    "must be in (0, 2)",
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Rotation of balloon `k` (by k·90° counter-clockwise): bottom, right, top, left.
+fn rot(k: usize, p: [f64; 2]) -> [f64; 2] {
+    match k % 4 {
+        0 => p,
+        1 => [-p[1], p[0]],
+        2 => [-p[0], -p[1]],
+        _ => [p[1], -p[0]],
+    }
+}
+
+/// Builds the scene.
+#[allow(clippy::needless_range_loop)] // k is the balloon index, used beyond indexing
+pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
+    p.validate()?;
+    let n = p.n;
+    let h = 1.6 / n as f64;
+    let eps = p.eps.unwrap_or(h / 10.0);
+    let mut x_ref: Vec<f64> = Vec::new();
+    let mut x0: Vec<f64> = Vec::new();
+    let mut fixed: Vec<bool> = Vec::new();
+    let push = |x_ref: &mut Vec<f64>,
+                x0: &mut Vec<f64>,
+                fixed: &mut Vec<bool>,
+                r: [f64; 2],
+                i: [f64; 2],
+                f: bool| {
+        x_ref.extend_from_slice(&r);
+        x0.extend_from_slice(&i);
+        fixed.push(f);
+        fixed.len() - 1
+    };
+    // Box polyline, counter-clockwise from the bottom-left corner: per wall k, the corner
+    // then the two support ends.
+    let mut box_vertices = Vec::new();
+    let mut support_ends = [[0usize; 2]; 4];
+    for k in 0..4 {
+        for (j, q) in [[-1.0, -1.0], [-0.8, -1.0], [0.8, -1.0]].iter().enumerate() {
+            let r = rot(k, *q);
+            let v = push(&mut x_ref, &mut x0, &mut fixed, r, r, true);
+            box_vertices.push(v);
+            if j > 0 {
+                support_ends[k][j - 1] = v;
+            }
+        }
+    }
+    let mut edges: Vec<[usize; 2]> = Vec::new();
+    let mut edge_body = Vec::new();
+    let mut bodies = Vec::new();
+    let nb = box_vertices.len();
+    let box_edges: Vec<usize> = (0..nb)
+        .map(|i| {
+            edges.push([box_vertices[i], box_vertices[(i + 1) % nb]]);
+            edge_body.push(4);
+            edges.len() - 1
+        })
+        .collect();
+    let mut energy = TotalEnergy::default();
+    let mut membranes = Vec::new();
+    for k in 0..4 {
+        // Membrane vertices from the support's left end to its right end (in wall frame).
+        let mut verts = vec![support_ends[k][0]];
+        for i in 1..n {
+            let s = -0.8 + 1.6 * i as f64 / n as f64;
+            let y = -1.0 + p.heights[k] * (1.0 - (s / 0.8).powi(2));
+            let v = push(
+                &mut x_ref,
+                &mut x0,
+                &mut fixed,
+                rot(k, [s, -1.0]),
+                rot(k, [s, y]),
+                false,
+            );
+            verts.push(v);
+        }
+        verts.push(support_ends[k][1]);
+        let mut body_edges = Vec::new();
+        let mut medges = Vec::new();
+        for w in verts.windows(2) {
+            edges.push([w[0], w[1]]);
+            edge_body.push(k);
+            body_edges.push(edges.len() - 1);
+            medges.push([w[0], w[1]]);
+        }
+        membranes.push((verts.clone(), medges));
+        bodies.push(Body {
+            name: format!("balloon{k}"),
+            kind: BodyKind::Curve,
+            h,
+            vertices: verts,
+            edges: body_edges,
+            triangles: vec![],
+        });
+    }
+    bodies.push(Body {
+        name: "box".into(),
+        kind: BodyKind::Curve,
+        h: 0.2,
+        vertices: box_vertices,
+        edges: box_edges,
+        triangles: vec![],
+    });
+    for (k, (verts, medges)) in membranes.into_iter().enumerate() {
+        energy
+            .terms
+            .push(Box::new(MembraneEnergy::new(medges, &x_ref, p.mu)));
+        energy.terms.push(Box::new(GasEnergy::new(
+            verts,
+            p.c * (1.0 + p.perturb[k]),
+            &x0,
+        )));
+    }
+    let mesh = Mesh {
+        dim: 2,
+        x_ref,
+        fixed,
+        edges,
+        edge_body,
+        triangles: vec![],
+        bodies,
+    };
+    Ok(Scene {
+        name: "balloons".into(),
+        mesh,
+        energy,
+        eps,
+        h,
+        x0,
+    })
+}
+
+/// The equilibrium reached, read from the contact pattern (SPEC §4).
+pub fn classify_state(touching: &[(usize, usize)]) -> String {
+    let has = |a: usize, b: usize| {
+        touching
+            .iter()
+            .any(|&(i, j)| (i == a && j == b) || (i == b && j == a))
+    };
+    let opposite: Vec<String> = [(0, 2), (1, 3)]
+        .iter()
+        .filter(|&&(a, b)| has(a, b))
+        .map(|(a, b)| format!("{a}-{b}"))
+        .collect();
+    let adjacent = [(0, 1), (1, 2), (2, 3), (0, 3)]
+        .iter()
+        .filter(|&&(a, b)| has(a, b))
+        .count();
+    if !opposite.is_empty() {
+        format!("broken({})", opposite.join(","))
+    } else if adjacent == 4 {
+        "symmetric".into()
+    } else {
+        format!("other({adjacent}_adjacent_pairs)")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classify() {
+        assert_eq!(
+            classify_state(&[(0, 1), (1, 2), (2, 3), (0, 3)]),
+            "symmetric"
+        );
+        assert_eq!(classify_state(&[(0, 1), (0, 2), (2, 3)]), "broken(0-2)");
+        assert_eq!(classify_state(&[]), "other(0_adjacent_pairs)");
+    }
+
+    #[test]
+    fn bad_params_are_named() {
+        let e = build(&BalloonsParams {
+            n: 1,
+            ..Default::default()
+        })
+        .err()
+        .unwrap();
+        assert!(e.to_string().contains("invalid n = 1"), "{e}");
+        let e = build(&BalloonsParams {
+            heights: [0.2, f64::NAN, 0.2, 0.2],
+            ..Default::default()
+        })
+        .err()
+        .unwrap();
+        assert!(e.to_string().contains("balloon 1"), "{e}");
+    }
+}

@@ -1,0 +1,103 @@
+//! The balloons scene end to end: every backend, every iterate admissible, J non-increasing,
+//! backends agreeing on the final energy; an inadmissible start is refused with the pair named.
+
+use contactlab::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
+use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab_solvers::{backend_from_name, QpSettings};
+
+fn solve(backend: &str, params: &BalloonsParams) -> (f64, Vec<IterationRecord>, RunStatus) {
+    let scene = build(params).unwrap();
+    let mut b = backend_from_name(backend, &QpSettings::default()).unwrap();
+    let mut records = Vec::new();
+    let res = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        b.as_mut(),
+        &OuterSettings::default(),
+        &mut |r, _| records.push(r.clone()),
+    )
+    .unwrap();
+    for r in &records {
+        assert!(
+            r.min_distance >= scene.eps,
+            "{backend}: iterate {} at distance {:.3e} < eps {:.3e}",
+            r.iteration,
+            r.min_distance,
+            scene.eps
+        );
+    }
+    for w in records.windows(2) {
+        assert!(
+            w[1].energy <= w[0].energy,
+            "{backend}: J increased from {} to {} at iteration {}",
+            w[0].energy,
+            w[1].energy,
+            w[1].iteration
+        );
+    }
+    (res.energy, records, res.status)
+}
+
+#[test]
+fn three_backends_agree_and_stay_admissible() {
+    for params in [
+        BalloonsParams {
+            n: 8,
+            ..Default::default()
+        },
+        BalloonsParams {
+            n: 8,
+            heights: [0.9, 0.2, 0.9, 0.2],
+            ..Default::default()
+        },
+    ] {
+        let mut energies = Vec::new();
+        for backend in ["clarabel", "osqp", "uzawa"] {
+            let (j, records, status) = solve(backend, &params);
+            assert_eq!(
+                status,
+                RunStatus::Converged,
+                "{backend} did not converge: {:?}",
+                records.last()
+            );
+            assert!(records.len() >= 2, "{backend}: no outer step taken");
+            energies.push((backend, j));
+        }
+        for &(b1, j1) in &energies {
+            for &(b2, j2) in &energies {
+                assert!(
+                    (j1 - j2).abs() <= 1e-6 * j1.abs(),
+                    "{b1} J = {j1} vs {b2} J = {j2}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn inadmissible_start_is_refused_with_the_pair_named() {
+    // Bottom and top parabolas of height 1.5 cross in the middle of the box.
+    let scene = build(&BalloonsParams {
+        n: 8,
+        heights: [1.5, 0.2, 1.5, 0.2],
+        ..Default::default()
+    })
+    .unwrap();
+    let mut b = backend_from_name("clarabel", &QpSettings::default()).unwrap();
+    let err = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        b.as_mut(),
+        &OuterSettings::default(),
+        &mut |_, _| {},
+    )
+    .unwrap_err();
+    assert!(matches!(err, RunError::InadmissibleStart { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(msg.contains("vertex") || msg.contains("edges"), "{msg}");
+    assert!(msg.contains("eps = "), "{msg}");
+}
