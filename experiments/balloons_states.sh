@@ -10,8 +10,8 @@ source scripts/ensure-cmake.sh
 backend=${1:-clarabel}
 shift || true
 ns=${*:-20 40 80}
-cargo build --release --quiet --bin contactlab
-bin=target/release/contactlab
+[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
+bin=${CONTACTLAB_BIN:-target/release/contactlab}
 for n in $ns; do
   for case in none p1e-6 p1e-3 p1e-2 asymmetric; do
     out=runs/states/$backend-n$n-$case

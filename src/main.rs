@@ -12,7 +12,7 @@ use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
 use contactlab::pairs::point_edge_pairs;
 use contactlab::scene::balloons::{self, classify_state, BalloonsParams};
-use contactlab_solvers::{backend_from_name, QpSettings};
+use contactlab_solvers::{backend_from_name, default_settings};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -65,9 +65,9 @@ struct RunArgs {
     /// Maximum outer iterations.
     #[arg(long, default_value_t = 2000)]
     max_outer: usize,
-    /// Backend tolerance (eps_abs = eps_rel).
-    #[arg(long, default_value_t = 1e-9)]
-    qp_tol: f64,
+    /// Backend tolerance (eps_abs = eps_rel); default 1e-9 clarabel, 1e-8 uzawa, 1e-6 osqp.
+    #[arg(long)]
+    qp_tol: Option<f64>,
     /// Run directory (default runs/<scene>-default).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -147,11 +147,11 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         params.heights.copy_from_slice(hs);
     }
     let scene = balloons::build(&params)?;
-    let qps = QpSettings {
-        eps_abs: a.qp_tol,
-        eps_rel: a.qp_tol,
-        ..Default::default()
-    };
+    let mut qps = default_settings(&a.backend);
+    if let Some(t) = a.qp_tol {
+        qps.eps_abs = t;
+        qps.eps_rel = t;
+    }
     let mut backend = backend_from_name(&a.backend, &qps)?;
     let settings = OuterSettings {
         tol_j: a.tol_j,
@@ -305,7 +305,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         all_iterates_admissible: admissible,
         params,
         settings,
-        qp_tol: a.qp_tol,
+        qp_tol: qps.eps_abs,
     };
     write_atomic(
         &out.join("summary.json"),

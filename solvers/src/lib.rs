@@ -27,7 +27,7 @@ pub mod qp;
 pub mod uzawa;
 
 pub use backend::{
-    backend_from_name, QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart,
-    BACKEND_NAMES,
+    backend_from_name, default_settings, QpBackend, QpError, QpSettings, QpSolution, QpStatus,
+    WarmStart, BACKEND_NAMES,
 };
 pub use qp::{CscMatrix, Qp};

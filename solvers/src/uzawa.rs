@@ -27,8 +27,8 @@
 //! momentum is reset (`t = 1`, `z = μ⁺`) when the dual value decreases or when the gradient
 //! mapping `μ⁺ − z` makes an obtuse angle with the step `μ⁺ − μ` (O'Donoghue–Candès adaptive
 //! restart). As a safeguard, `L` is doubled whenever a momentum-free step decreases `D` (which
-//! cannot happen with `L ≥ λ_max`). Since `x(·)` is affine, `x(z)` is the same combination of `x(μ⁺)` and `x(μ)`, so an
-//! iteration costs one pair of triangular solves.
+//! cannot happen with `L ≥ λ_max`). Since `x(·)` is affine, `x(z)` is the same combination of
+//! `x(μ⁺)` and `x(μ)`, so an iteration costs one pair of triangular solves.
 //!
 //! # Stopping test
 //!
@@ -36,8 +36,8 @@
 //! `τ = eps_abs + eps_rel·max(1, ‖d‖∞)`, the solve stops with `Solved` when the primal violation
 //! `max(max_eq |s_k|, max_ineq max(−s_k, 0)) ≤ τ`, the complementarity
 //! `max_ineq |μ_k s_k| ≤ τ·max(1, ‖μ‖∞)` and the duality gap `|f(x) − D(μ)| = |μᵀs| ≤
-//! τ·max(1, |f(x)|)` all hold (the gap test keeps the objective accurate when multipliers are
-//! large).
+//! τ·max(1, |f(x)|, ‖μ‖∞)` all hold (the gap test keeps the objective accurate when
+//! multipliers are large).
 //!
 //! # Other statuses
 //!
@@ -471,13 +471,13 @@ impl QpBackend for UzawaBackend {
             }
             let mu_norm = inf_norm(&mu_new);
             let new_val = 0.5 * (dot(&mu_new, &rows.d) - dot(&mu_new, &s) + dot(&qp.q, &x_new));
-            if iterations % 20000 == 0 {
-                eprintln!("it {iterations} viol {viol:e} comp {comp:e} mu {mu_norm:e} tol {tol:e} L {big_l:e} val {new_val:.15e} mu={mu_new:?}");
-            }
             // Duality gap f(x(μ)) − D(μ) = μᵀs (stationarity is exact).
             let gap = dot(&mu_new, &s).abs();
             let f_val = new_val + dot(&mu_new, &s);
-            if viol <= tol && comp <= tol * mu_norm.max(1.0) && gap <= tol * f_val.abs().max(1.0) {
+            if viol <= tol
+                && comp <= tol * mu_norm.max(1.0)
+                && gap <= tol * f_val.abs().max(mu_norm).max(1.0)
+            {
                 std::mem::swap(&mut mu, &mut mu_new);
                 std::mem::swap(&mut x, &mut x_new);
                 break QpStatus::Solved;

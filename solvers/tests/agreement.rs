@@ -7,10 +7,12 @@ use contactlab_solvers::{
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// Tight tolerances: the objective error of a point with violation `v` is about `‖y‖∞·v`, and a
+/// few seeds have `‖y‖∞ ≈ 2e3`, so 1e-10 keeps the 1e-6 relative objective agreement safe.
 fn settings() -> QpSettings {
     QpSettings {
-        eps_abs: 1e-9,
-        eps_rel: 1e-9,
+        eps_abs: 1e-10,
+        eps_rel: 1e-10,
         max_iter: 200_000,
         time_limit_s: 10.0,
     }
@@ -113,7 +115,7 @@ fn solve_all_and_compare(qp: &Qp, label: &str) {
 
 #[test]
 fn random_feasible_qps_agree() {
-    for seed in 0..1000 {
+    for seed in 0..200 {
         let qp = random_qp(seed);
         solve_all_and_compare(&qp, &format!("seed {seed}"));
     }
