@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Issue 2's agreement check: the default balloons scene (n = 40) with each backend at its
+# default tolerance; prints final energy, state and status of each, and the largest relative
+# energy difference. Usage: bash experiments/backends_n40.sh [N]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/ensure-cmake.sh
+n=${1:-40}
+[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
+bin=${CONTACTLAB_BIN:-target/release/contactlab}
+for b in clarabel osqp uzawa; do
+  [ -f runs/n$n-$b/summary.json ] || $bin run balloons --n "$n" --backend $b --quiet --frame-every 1000000 --out runs/n$n-$b || true
+done
+python3 - "$n" <<'PY'
+import json, os, sys
+n = sys.argv[1]
+rows = []
+for b in ["clarabel", "osqp", "uzawa"]:
+    f = f"runs/n{n}-{b}/summary.json"
+    if os.path.exists(f):
+        s = json.load(open(f))
+        rows.append((b, s["status"], s["state"], s["final_energy"], s["outer_iterations"], s["wall_time_s"]))
+        print(f"{b:9s} {s['status']:22s} {s['state']:14s} J = {s['final_energy']:.12e}  outer {s['outer_iterations']}  {s['wall_time_s']:.1f} s")
+    else:
+        print(f"{b:9s} no summary (run did not finish)")
+js = [r[3] for r in rows if r[1] == "converged"]
+if len(js) > 1:
+    print(f"max relative energy difference among converged runs: {(max(js) - min(js)) / abs(min(js)):.3e}")
+PY
