@@ -4,6 +4,8 @@
 //! All functions take the flat position vector `x` (`dim` coordinates per vertex) and use the
 //! degree-of-freedom numbering `dim*v + k` of [`crate::mesh`].
 
+#[cfg(test)]
+mod fd_test;
 pub mod gas;
 pub mod gravity;
 pub mod membrane;
