@@ -108,7 +108,7 @@ impl DofMap {
 }
 
 /// Builds the QP of one inner step at `y`. Returns the QP (rows: first two per contact pair,
-/// then one equality row per rank-one term).
+/// then one equality row per rank-one term) and the gradient `∇J(y)` it used.
 #[allow(clippy::needless_range_loop)] // i indexes the row and the edge vertex together
 pub fn build_qp(
     mesh: &Mesh,
@@ -118,7 +118,7 @@ pub fn build_qp(
     y: &[f64],
     eps_qp: f64,
     settings: &InnerSettings,
-) -> Result<Qp, QpError> {
+) -> Result<(Qp, Vec<f64>), QpError> {
     let g = energy.gradient(y);
     let h = energy.hessian(y, true);
     let nf = dofs.nfree;
@@ -189,7 +189,7 @@ pub fn build_qp(
         }
     }
     let a = CscMatrix::from_triplets(m, n, &atrip)?;
-    Ok(Qp { p, q, a, l, u })
+    Ok((Qp { p, q, a, l, u }, g))
 }
 
 /// Minimizes J over T(ψ) starting from `psi` (which must lie in T(ψ)).
@@ -221,7 +221,7 @@ pub fn solve_subproblem(
     let mut warm: Option<WarmStart> = None;
     for _ in 0..settings.max_inner {
         let t0 = Instant::now();
-        let qp = build_qp(mesh, energy, dofs, rows, &y, eps_qp, settings)?;
+        let (qp, g) = build_qp(mesh, energy, dofs, rows, &y, eps_qp, settings)?;
         res.t_assembly_s += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         let sol = backend.solve(&qp, warm.as_ref())?;
@@ -241,7 +241,6 @@ pub fn solve_subproblem(
                 d[dof] = sol.x[c];
             }
         }
-        let g = energy.gradient(&y);
         let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
         if slope >= 0.0 {
             // d = 0 up to round-off: y is optimal for the model.

@@ -242,22 +242,8 @@ impl QpBackend for ClarabelBackend {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::CscMatrix;
 
-    /// min ½(x0² + x1²) − x0 − x1  s.t.  x0 + x1 ≤ 1, 0.8 ≤ x0 ≤ 5, and a free row on x1.
-    fn small_qp() -> Qp {
-        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
-        let a =
-            CscMatrix::from_triplets(3, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0), (2, 1, 1.0)])
-                .unwrap();
-        Qp {
-            p,
-            q: vec![-1.0, -1.0],
-            a,
-            l: vec![f64::NEG_INFINITY, 0.8, f64::NEG_INFINITY],
-            u: vec![1.0, 5.0, f64::INFINITY],
-        }
-    }
+    use crate::qp::tests::small_qp;
 
     #[test]
     fn solves_small_qp_with_crate_dual_signs() {

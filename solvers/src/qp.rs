@@ -283,8 +283,24 @@ impl Qp {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// min ½(x0² + x1²) − x0 − x1  s.t.  x0 + x1 ≤ 1, 0.8 ≤ x0 ≤ 5, and a free row on x1
+    /// (shared by the backends' unit tests).
+    pub(crate) fn small_qp() -> Qp {
+        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
+        let a =
+            CscMatrix::from_triplets(3, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0), (2, 1, 1.0)])
+                .unwrap();
+        Qp {
+            p,
+            q: vec![-1.0, -1.0],
+            a,
+            l: vec![f64::NEG_INFINITY, 0.8, f64::NEG_INFINITY],
+            u: vec![1.0, 5.0, f64::INFINITY],
+        }
+    }
 
     #[test]
     fn triplets_sum_duplicates_and_sort() {

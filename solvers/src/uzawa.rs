@@ -559,19 +559,7 @@ impl QpBackend for UzawaBackend {
 mod tests {
     use super::*;
 
-    fn small_qp() -> Qp {
-        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
-        let a =
-            CscMatrix::from_triplets(3, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0), (2, 1, 1.0)])
-                .unwrap();
-        Qp {
-            p,
-            q: vec![-1.0, -1.0],
-            a,
-            l: vec![f64::NEG_INFINITY, 0.8, f64::NEG_INFINITY],
-            u: vec![1.0, 5.0, f64::INFINITY],
-        }
-    }
+    use crate::qp::tests::small_qp;
 
     #[test]
     fn ldl_solves_a_banded_system() {
