@@ -14,6 +14,7 @@
 //! `&mut dyn contactlab_solvers::QpBackend`.
 #![warn(missing_docs)]
 
+pub mod broad_phase;
 pub mod diagnostics;
 pub mod energy;
 pub mod geometry;

@@ -5,12 +5,12 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
+use contactlab::broad_phase::point_edge_near;
 use contactlab::diagnostics::contact_pattern;
-use contactlab::outer::{run, IterationRecord, OuterSettings};
+use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, TrustSettings};
 use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
 use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
-use contactlab::pairs::point_edge_pairs;
 use contactlab::scene::balloons::{self, classify_state, BalloonsParams};
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::io::Write;
@@ -59,6 +59,15 @@ struct RunArgs {
     /// Initial heights of the four balloons, comma-separated (e.g. 0.9,0.2,0.9,0.2).
     #[arg(long, value_delimiter = ',')]
     heights: Option<Vec<f64>>,
+    /// Which pairs of T(ψ) the sub-problems carry: lazy (default), trust-region, all-pairs.
+    #[arg(long, default_value = "lazy", value_parser = parse_pruning)]
+    pruning: Pruning,
+    /// Initial trust-region half-width δ0 relative to the mean edge length (trust-region only).
+    #[arg(long, default_value_t = 1.0)]
+    trust_delta0: f64,
+    /// Inner (Newton-type) steps per T(ψ) at most; 1 gives inexact sub-problems.
+    #[arg(long, default_value_t = 50)]
+    max_inner: usize,
     /// Relative energy tolerance of the outer stopping rule.
     #[arg(long, default_value_t = 1e-10)]
     tol_j: f64,
@@ -77,6 +86,11 @@ struct RunArgs {
     /// No progress line.
     #[arg(long)]
     quiet: bool,
+}
+
+fn parse_pruning(s: &str) -> Result<Pruning, String> {
+    Pruning::from_name(s)
+        .ok_or_else(|| format!("--pruning {s:?}: expected one of lazy, trust-region, all-pairs"))
 }
 
 fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
@@ -105,6 +119,7 @@ struct Summary {
     h: f64,
     eps: f64,
     backend: String,
+    pruning: &'static str,
     status: &'static str,
     outer_iterations: usize,
     inner_iterations: usize,
@@ -153,11 +168,26 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         qps.eps_rel = t;
     }
     let mut backend = backend_from_name(&a.backend, &qps)?;
-    let settings = OuterSettings {
+    let mut settings = OuterSettings {
         tol_j: a.tol_j,
         max_outer: a.max_outer,
+        pruning: a.pruning,
+        trust: TrustSettings {
+            delta0: a.trust_delta0,
+            ..Default::default()
+        },
         ..Default::default()
     };
+    settings.inner.max_inner = a.max_inner;
+    if a.max_inner == 0 {
+        bail!("--max-inner must be >= 1, got 0");
+    }
+    if !(a.trust_delta0 > 0.0 && a.trust_delta0.is_finite()) {
+        bail!(
+            "--trust-delta0 must be finite and > 0, got {}",
+            a.trust_delta0
+        );
+    }
     if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
         bail!("--tol-j must be > 0, got {}", settings.tol_j);
     }
@@ -203,8 +233,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         }
         if !quiet {
             eprint!(
-                "\r[{}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
-                a.backend, rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
+                "\r[{} {}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
+                a.backend, a.pruning.as_str(), rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
             );
             let _ = std::io::stderr().flush();
         }
@@ -241,8 +271,17 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
         pvd.write(&out.join("frames.pvd"))?;
     }
-    let (pairs, _) = point_edge_pairs(mesh);
-    let pattern = contact_pattern(mesh, &res.x, &pairs, scene.eps);
+    let near: Vec<_> = point_edge_near(
+        mesh,
+        &res.x,
+        &[],
+        &vec![1.01 * scene.eps; mesh.edges.len()],
+        false,
+    )
+    .into_iter()
+    .map(|p| p.pair)
+    .collect();
+    let pattern = contact_pattern(mesh, &res.x, &near, scene.eps);
     let names: Vec<[String; 2]> = pattern
         .iter()
         .map(|&(i, j)| [mesh.bodies[i].name.clone(), mesh.bodies[j].name.clone()])
@@ -290,6 +329,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         h: scene.h,
         eps: scene.eps,
         backend: a.backend.clone(),
+        pruning: settings.pruning.as_str(),
         status: res.status.as_str(),
         outer_iterations: res.outer_iterations,
         inner_iterations: res.inner_iterations,

@@ -4,14 +4,74 @@
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an observer
 //! callback, which writes CSV, frames or a progress line.
 
+use crate::broad_phase::{min_distance_near, point_edge_near};
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;
-use crate::pairs::{check_admissible, point_edge_pairs, MinDistance, PointEdgePair};
-use crate::rows::{point_edge_rows, PointEdgeRow};
-use crate::subproblem::{solve_subproblem, DofMap, InnerSettings};
+use crate::pairs::{point_edge_pairs, MinDistance, PointEdgePair};
+use crate::rows::{point_edge_row, point_edge_rows, PointEdgeRow};
+use crate::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
+use rayon::prelude::*;
+use std::collections::HashSet;
 use std::time::Instant;
 use thiserror::Error;
+
+/// Which pairs of T(ψ) the sub-problem carries (SPEC §2, "Only what the scene requires").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pruning {
+    /// Every `point_edge` pair with a free vertex (the paper-faithful reference, O(N²) rows).
+    AllPairs,
+    /// A working set grown until the sub-problem's solution satisfies every row of the full
+    /// T(ψ) (checked through the broad phase with margin ε + 2D): the same iterates as
+    /// all-pairs.
+    Lazy,
+    /// A box `|φ(v) − ψ(v)|∞ ≤ δ` and rows only for pairs closer than `ε + 2√2·δ`; δ adapts.
+    TrustRegion,
+}
+
+impl Pruning {
+    /// Name used in CSV, JSON and on the command line.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Pruning::AllPairs => "all-pairs",
+            Pruning::Lazy => "lazy",
+            Pruning::TrustRegion => "trust-region",
+        }
+    }
+
+    /// Parses [`Pruning::as_str`].
+    pub fn from_name(s: &str) -> Option<Pruning> {
+        match s {
+            "all-pairs" => Some(Pruning::AllPairs),
+            "lazy" => Some(Pruning::Lazy),
+            "trust-region" => Some(Pruning::TrustRegion),
+            _ => None,
+        }
+    }
+}
+
+/// Trust-region settings, lengths relative to the mean contact edge length `h̄` of ψ_0.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrustSettings {
+    /// Initial δ / h̄.
+    pub delta0: f64,
+    /// Smallest δ / h̄.
+    pub delta_min: f64,
+    /// Largest δ / h̄.
+    pub delta_max: f64,
+}
+
+impl Default for TrustSettings {
+    fn default() -> Self {
+        TrustSettings {
+            delta0: 1.0,
+            delta_min: 1.0 / 64.0,
+            delta_max: 64.0,
+        }
+    }
+}
 
 /// Settings of the outer loop.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -21,6 +81,10 @@ pub struct OuterSettings {
     pub tol_j: f64,
     /// Maximum number of outer steps.
     pub max_outer: usize,
+    /// Which pairs the sub-problems carry.
+    pub pruning: Pruning,
+    /// Trust-region settings (used with [`Pruning::TrustRegion`]).
+    pub trust: TrustSettings,
     /// Inner loop settings.
     pub inner: InnerSettings,
 }
@@ -30,6 +94,8 @@ impl Default for OuterSettings {
         OuterSettings {
             tol_j: 1e-10,
             max_outer: 2000,
+            pruning: Pruning::Lazy,
+            trust: TrustSettings::default(),
             inner: InnerSettings::default(),
         }
     }
@@ -82,6 +148,10 @@ pub struct IterationRecord {
     pub rows: usize,
     /// Rows active at φ_k (value within the margin of ε).
     pub active_rows: usize,
+    /// QP re-solves in this outer step because lazy rows were added.
+    pub lazy_rounds: usize,
+    /// Trust-region half-width δ used in this step (0 without a trust region).
+    pub trust_delta: f64,
     /// Inner steps of this outer step.
     pub inner_iterations: usize,
     /// Backend iterations of this outer step.
@@ -145,6 +215,61 @@ pub struct RunResult {
     pub wall_time_s: f64,
 }
 
+/// Mean length of the contact edges at `x` (the `h̄` of [`TrustSettings`]).
+pub fn mean_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
+    if mesh.edges.is_empty() {
+        return 0.0;
+    }
+    mesh.edges
+        .iter()
+        .map(|e| (Mesh::p2(x, e[0]) - Mesh::p2(x, e[1])).norm())
+        .sum::<f64>()
+        / mesh.edges.len() as f64
+}
+
+/// Per-vertex Euclidean displacement `|y(v) − x(v)|`.
+fn displacements(x: &[f64], y: &[f64]) -> Vec<f64> {
+    x.chunks(2)
+        .zip(y.chunks(2))
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .collect()
+}
+
+/// The lazy-row oracle at ψ (see [`RowOracle`]): a row of T(ψ) moves by at most
+/// `D_x + max(D_a0, D_a1)` from its value at ψ, which is at least `dist(ψ(x), ψ(a))`, with
+/// `D_v = |φ(v) − ψ(v)|`; so only pairs closer than `ε + δ + D_x + D_a` at ψ can be violated by
+/// φ. The broad phase finds exactly those, and the rows below `ε + δ` at φ are returned.
+fn lazy_oracle<'a>(
+    mesh: &'a Mesh,
+    psi: &'a [f64],
+    eps_qp: f64,
+) -> impl FnMut(&[f64], &[PointEdgeRow]) -> Vec<PointEdgeRow> + 'a {
+    let mut carried: HashSet<PointEdgePair> = HashSet::new();
+    move |phi: &[f64], rows: &[PointEdgeRow]| {
+        if carried.len() != rows.len() {
+            carried = rows.iter().map(|r| r.pair).collect();
+        }
+        let disp = displacements(psi, phi);
+        let rv: Vec<f64> = disp.iter().map(|d| d * (1.0 + 1e-12) + eps_qp).collect();
+        let re: Vec<f64> = mesh
+            .edges
+            .iter()
+            .map(|e| disp[e[0]].max(disp[e[1]]) * (1.0 + 1e-12))
+            .collect();
+        let added: Vec<PointEdgeRow> = point_edge_near(mesh, psi, &rv, &re, true)
+            .par_iter()
+            .filter(|p| !carried.contains(&p.pair))
+            .filter_map(|p| point_edge_row(mesh, psi, p.pair))
+            .filter(|r| {
+                let v = r.values(phi);
+                v[0].min(v[1]) < eps_qp
+            })
+            .collect();
+        carried.extend(added.iter().map(|r| r.pair));
+        added
+    }
+}
+
 /// Runs the outer loop from `x0`.
 pub fn run(
     mesh: &Mesh,
@@ -160,8 +285,8 @@ pub fn run(
     }
     let start = Instant::now();
     let t0 = Instant::now();
-    let (pairs, fixed_pairs): (Vec<PointEdgePair>, Vec<PointEdgePair>) = point_edge_pairs(mesh);
-    let md0 = check_admissible(mesh, x0, &pairs, &fixed_pairs);
+    // The start is checked over every disjoint pair, the all-fixed ones included (once).
+    let md0 = min_distance_near(mesh, x0, 2.0 * eps, false);
     if md0.distance < eps {
         return Err(RunError::InadmissibleStart {
             pair: md0.pair.to_string(),
@@ -169,21 +294,31 @@ pub fn run(
             eps,
         });
     }
+    let all_pairs: Vec<PointEdgePair> = if settings.pruning == Pruning::AllPairs {
+        point_edge_pairs(mesh).0
+    } else {
+        Vec::new()
+    };
     let dofs = DofMap::new(mesh);
     let mut x = x0.to_vec();
     let mut jx = energy.value(&x);
     if !jx.is_finite() {
         return Err(RunError::BadInitialEnergy(jx));
     }
+    let hbar = mean_edge_length(mesh, x0);
+    let mut delta = settings.trust.delta0 * hbar;
+    let mut d_prev = hbar;
     let t_pairs0 = t0.elapsed().as_secs_f64();
     observer(
         &IterationRecord {
             iteration: 0,
             energy: jx,
             min_distance: md0.distance,
-            pairs: pairs.len(),
+            pairs: all_pairs.len(),
             rows: 0,
             active_rows: 0,
+            lazy_rounds: 0,
+            trust_delta: 0.0,
             inner_iterations: 0,
             backend_iterations: 0,
             qp_status: "none",
@@ -206,29 +341,62 @@ pub fn run(
         wall_time_s: 0.0,
     };
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
+    let eps_qp = eps + margin;
+    let ne = mesh.edges.len();
     for k in 1..=settings.max_outer {
         let tp = Instant::now();
-        // The all-fixed pairs are constant: checked once above, never given rows.
-        let rows = point_edge_rows(mesh, &x, &pairs).expect("admissible ψ has positive distances");
-        let t_pairs = tp.elapsed().as_secs_f64();
+        // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
+        // never given rows).
+        let pairs: Vec<PointEdgePair> = match settings.pruning {
+            Pruning::AllPairs => all_pairs.clone(),
+            // Start from the pairs that the last step's displacement could reach.
+            Pruning::Lazy => point_edge_near(mesh, &x, &[], &vec![eps_qp + d_prev; ne], true)
+                .into_iter()
+                .map(|p| p.pair)
+                .collect(),
+            // Inside the box a row moves by at most 2√2·δ: farther pairs cannot be violated.
+            Pruning::TrustRegion => {
+                let r = eps_qp + 2.0 * std::f64::consts::SQRT_2 * delta * (1.0 + 1e-9);
+                point_edge_near(mesh, &x, &[], &vec![r; ne], true)
+                    .into_iter()
+                    .map(|p| p.pair)
+                    .collect()
+            }
+        };
+        let rows0 = point_edge_rows(mesh, &x, &pairs).expect("admissible ψ has positive distances");
+        let t_pairs_s = tp.elapsed().as_secs_f64();
+        let trust =
+            (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: &x, delta });
+        let mut oracle = lazy_oracle(mesh, &x, eps_qp);
         let sub = solve_subproblem(
             mesh,
             energy,
             &dofs,
-            &rows,
+            rows0,
             &x,
             eps,
+            trust,
+            (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
             backend,
             &settings.inner,
         )?;
+        let box_active = trust.is_some_and(|tb| {
+            let dmax = x
+                .iter()
+                .zip(&sub.y)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            dmax >= (1.0 - 1e-3) * tb.delta
+        });
+        drop(oracle);
         result.outer_iterations = k;
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
         let tc = Instant::now();
-        let md = check_admissible(mesh, &sub.y, &pairs, &fixed_pairs);
+        let md = min_distance_near(mesh, &sub.y, 2.0 * eps, true);
         let t_check = tc.elapsed().as_secs_f64();
-        let active_rows = rows
-            .iter()
+        let active_rows = sub
+            .rows
+            .par_iter()
             .map(|r| {
                 r.values(&sub.y)
                     .iter()
@@ -241,13 +409,19 @@ pub fn run(
                 iteration: k,
                 energy: sub.energy,
                 min_distance: md.distance,
-                pairs: pairs.len(),
-                rows: 2 * rows.len(),
+                pairs: sub.rows.len(),
+                rows: 2 * sub.rows.len(),
                 active_rows,
+                lazy_rounds: sub.lazy_rounds,
+                trust_delta: if settings.pruning == Pruning::TrustRegion {
+                    delta
+                } else {
+                    0.0
+                },
                 inner_iterations: sub.inner_iterations,
                 backend_iterations: sub.backend_iterations,
                 qp_status: sub.qp_status.as_str(),
-                t_pairs_s: t_pairs + t_check,
+                t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
                 t_assembly_s: sub.t_assembly_s,
                 t_solve_s: sub.t_solve_s,
             },
@@ -263,11 +437,15 @@ pub fn run(
             break;
         }
         let jprev = jx;
+        d_prev = displacements(&x, &sub.y)
+            .into_iter()
+            .fold(0.0, f64::max)
+            .max(1e-3 * hbar);
         x = sub.y;
         jx = sub.energy;
         result.energy = jx;
         result.min_distance = md;
-        result.last_rows = rows;
+        result.last_rows = sub.rows;
         result.multipliers = sub.multipliers;
         if sub.qp_status != QpStatus::Solved {
             result.status = RunStatus::SubproblemFailed;
@@ -277,7 +455,17 @@ pub fn run(
             result.status = RunStatus::LineSearchFailed;
             break;
         }
-        if (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
+        if settings.pruning == Pruning::TrustRegion {
+            // Grow δ while the box binds; shrink it when the step stays well inside.
+            let t = &settings.trust;
+            if box_active {
+                delta = (2.0 * delta).min(t.delta_max * hbar);
+            } else if d_prev < 0.25 * delta {
+                delta = (0.5 * delta).max(t.delta_min * hbar);
+            }
+        }
+        // With a binding box the step is not argmin over T(ψ): do not stop on it.
+        if !box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
             result.status = RunStatus::Converged;
             break;
         }

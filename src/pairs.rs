@@ -9,7 +9,8 @@ use crate::geometry::{edge_edge_distance_2d, point_edge_distance};
 use crate::mesh::Mesh;
 
 /// A vertex–edge pair: vertex `x`, contact edge index `a` (into [`Mesh::edges`]), `x ∉ a`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// Ordered by vertex, then edge (the order of the broad phase's output).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct PointEdgePair {
     /// Vertex.
     pub x: usize,

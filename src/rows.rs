@@ -12,6 +12,7 @@ use crate::geometry::point_edge_distance;
 use crate::mesh::Mesh;
 use crate::pairs::PointEdgePair;
 use nalgebra::Vector2;
+use rayon::prelude::*;
 
 /// The two rows of one `point_edge` pair, frozen at ψ.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,31 +41,35 @@ impl PointEdgeRow {
     }
 }
 
-/// Builds the rows of T(ψ) for `pairs`. A pair at distance 0 (ψ not admissible) has no normal;
-/// the caller has checked admissibility first, so this returns `None` then.
+/// The rows of one pair at ψ; `None` at distance 0 (no normal).
+pub fn point_edge_row(mesh: &Mesh, psi: &[f64], pair: PointEdgePair) -> Option<PointEdgeRow> {
+    let edge = mesh.edges[pair.a];
+    let px = Mesh::p2(psi, pair.x);
+    let q = point_edge_distance(&px, &Mesh::p2(psi, edge[0]), &Mesh::p2(psi, edge[1]));
+    if q.distance <= 0.0 {
+        return None;
+    }
+    Some(PointEdgeRow {
+        pair,
+        edge,
+        n: (q.closest - px) / q.distance,
+        distance: q.distance,
+        alpha: q.alpha,
+    })
+}
+
+/// Builds the rows of T(ψ) for `pairs` (rayon-parallel, in the order of `pairs`). A pair at
+/// distance 0 (ψ not admissible) has no normal; the caller has checked admissibility first, so
+/// this returns `None` then.
 pub fn point_edge_rows(
     mesh: &Mesh,
     psi: &[f64],
     pairs: &[PointEdgePair],
 ) -> Option<Vec<PointEdgeRow>> {
-    let mut rows = Vec::with_capacity(pairs.len());
-    for &pair in pairs {
-        let edge = mesh.edges[pair.a];
-        let px = Mesh::p2(psi, pair.x);
-        let q = point_edge_distance(&px, &Mesh::p2(psi, edge[0]), &Mesh::p2(psi, edge[1]));
-        if q.distance <= 0.0 {
-            return None;
-        }
-        let n = (q.closest - px) / q.distance;
-        rows.push(PointEdgeRow {
-            pair,
-            edge,
-            n,
-            distance: q.distance,
-            alpha: q.alpha,
-        });
-    }
-    Some(rows)
+    pairs
+        .par_iter()
+        .map(|&pair| point_edge_row(mesh, psi, pair))
+        .collect()
 }
 
 /// Smallest row value minus ε over all rows at `phi` (≥ 0 iff φ ∈ T(ψ)).

@@ -12,6 +12,9 @@
 //! over the free degrees of freedom goes to the backend; then a backtracking (Armijo) line
 //! search on J along `d`. Any point of `[y, y + d]` is in T(ψ) by convexity.
 //!
+//! With a trust region (SPEC §2, "Only what the scene requires") the QP also carries the box
+//! `|y(v) + d(v) − ψ(v)|∞ ≤ δ` on every free dof, as rows after the rank-one rows.
+//!
 //! Two safeguards, both kept out of the reported energy:
 //! - the proximal term `ρ = max(rho_abs, rho_rel · max diag H)` makes `P` positive definite (a
 //!   slack membrane with |F| < 1 has no stiffness);
@@ -74,8 +77,14 @@ pub struct SubproblemResult {
     pub qp_status: QpStatus,
     /// The line search could not decrease J along the last direction.
     pub line_search_failed: bool,
+    /// The rows the last QP carried (the given ones, then those a [`RowOracle`] added).
+    pub rows: Vec<PointEdgeRow>,
     /// Contact multipliers of the last QP, two per row pair (`μ = −y_QP ≥ 0`).
     pub multipliers: Vec<[f64; 2]>,
+    /// QP re-solves because the oracle added rows (lazy rows).
+    pub lazy_rounds: usize,
+    /// Seconds spent in the oracle (pair search for lazy rows).
+    pub t_pairs_s: f64,
     /// Seconds spent assembling (gradient, Hessian, QP matrices).
     pub t_assembly_s: f64,
     /// Seconds spent in the backend.
@@ -107,9 +116,20 @@ impl DofMap {
     }
 }
 
+/// A trust-region box `|φ(v) − ψ(v)|∞ ≤ delta` around `psi`.
+#[derive(Clone, Copy, Debug)]
+pub struct TrustBox<'a> {
+    /// The centre ψ (the outer iterate).
+    pub psi: &'a [f64],
+    /// Half-width δ > 0.
+    pub delta: f64,
+}
+
 /// Builds the QP of one inner step at `y`. Returns the QP (rows: first two per contact pair,
-/// then one equality row per rank-one term) and the gradient `∇J(y)` it used.
+/// then one equality row per rank-one term, then one box row per free dof when `trust` is
+/// given) and the gradient `∇J(y)` it used.
 #[allow(clippy::needless_range_loop)] // i indexes the row and the edge vertex together
+#[allow(clippy::too_many_arguments)]
 pub fn build_qp(
     mesh: &Mesh,
     energy: &TotalEnergy,
@@ -117,6 +137,7 @@ pub fn build_qp(
     rows: &[PointEdgeRow],
     y: &[f64],
     eps_qp: f64,
+    trust: Option<TrustBox>,
     settings: &InnerSettings,
 ) -> Result<(Qp, Vec<f64>), QpError> {
     let g = energy.gradient(y);
@@ -150,16 +171,14 @@ pub fn build_qp(
             q[c] = g[dof];
         }
     }
-    let m = 2 * rows.len() + naux;
-    let mut atrip: Vec<(usize, usize, f64)> = Vec::with_capacity(12 * rows.len());
+    let nbox = if trust.is_some() { nf } else { 0 };
+    let m = 2 * rows.len() + naux + nbox;
+    let mut atrip: Vec<(usize, usize, f64)> = Vec::with_capacity(12 * rows.len() + nbox);
     let mut l = vec![0.0; m];
-    let u = {
-        let mut u = vec![f64::INFINITY; m];
-        for v in u.iter_mut().skip(2 * rows.len()) {
-            *v = 0.0;
-        }
-        u
-    };
+    let mut u = vec![f64::INFINITY; m];
+    for v in u.iter_mut().skip(2 * rows.len()).take(naux) {
+        *v = 0.0;
+    }
     let dim = mesh.dim;
     for (r, row) in rows.iter().enumerate() {
         let vals = row.values(y);
@@ -188,24 +207,48 @@ pub fn build_qp(
             }
         }
     }
+    if let Some(tb) = trust {
+        let base = 2 * rows.len() + naux;
+        for (dof, &c) in dofs.col.iter().enumerate() {
+            if c != usize::MAX {
+                let off = tb.psi[dof] - y[dof];
+                atrip.push((base + c, c, 1.0));
+                l[base + c] = off - tb.delta;
+                u[base + c] = off + tb.delta;
+            }
+        }
+    }
     let a = CscMatrix::from_triplets(m, n, &atrip)?;
     Ok((Qp { p, q, a, l, u }, g))
 }
 
-/// Minimizes J over T(ψ) starting from `psi` (which must lie in T(ψ)).
+/// Lazy rows: given a trial point and the rows carried so far, returns the rows of T(ψ) that
+/// the trial point violates (value below the QP level `ε + δ`) and that are not carried yet.
+pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PointEdgeRow]) -> Vec<PointEdgeRow>;
+
+/// Minimizes J over the rows `rows` of T(ψ) (and the box `trust`, if given) starting from
+/// `start`, which must satisfy every row of T(ψ) (`≥ ε`) and the box.
+///
+/// With an `oracle` (lazy rows), every QP solution `y + d` is checked against the whole of T(ψ)
+/// and the QP is solved again with the violated rows added until none is: each inner QP then has
+/// the solution of the all-pairs QP (it is strictly convex), so the inner path, and the outer
+/// iterates, are those of the all-pairs mode.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_subproblem(
     mesh: &Mesh,
     energy: &TotalEnergy,
     dofs: &DofMap,
-    rows: &[PointEdgeRow],
-    psi: &[f64],
+    rows: Vec<PointEdgeRow>,
+    start: &[f64],
     eps: f64,
+    trust: Option<TrustBox>,
+    mut oracle: Option<RowOracle>,
     backend: &mut dyn QpBackend,
     settings: &InnerSettings,
 ) -> Result<SubproblemResult, QpError> {
+    let mut rows = rows;
     let eps_qp = eps + settings.margin_rel * eps + settings.margin_abs;
-    let mut y = psi.to_vec();
+    let mut y = start.to_vec();
     let mut jy = energy.value(&y);
     let mut res = SubproblemResult {
         y: Vec::new(),
@@ -214,44 +257,70 @@ pub fn solve_subproblem(
         backend_iterations: 0,
         qp_status: QpStatus::Solved,
         line_search_failed: false,
-        multipliers: vec![[0.0; 2]; rows.len()],
+        rows: Vec::new(),
+        multipliers: Vec::new(),
+        lazy_rounds: 0,
         t_assembly_s: 0.0,
+        t_pairs_s: 0.0,
         t_solve_s: 0.0,
     };
     let mut warm: Option<WarmStart> = None;
-    for _ in 0..settings.max_inner {
-        let t0 = Instant::now();
-        let (qp, g) = build_qp(mesh, energy, dofs, rows, &y, eps_qp, settings)?;
-        res.t_assembly_s += t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        let sol = backend.solve(&qp, warm.as_ref())?;
-        res.t_solve_s += t1.elapsed().as_secs_f64();
+    'inner: for _ in 0..settings.max_inner {
         res.inner_iterations += 1;
-        res.backend_iterations += sol.iterations;
-        res.qp_status = sol.status;
-        if sol.status != QpStatus::Solved {
-            break;
-        }
-        for (r, mult) in res.multipliers.iter_mut().enumerate() {
-            *mult = [-sol.y[2 * r], -sol.y[2 * r + 1]];
-        }
-        let mut d = vec![0.0; y.len()];
-        for (dof, &c) in dofs.col.iter().enumerate() {
-            if c != usize::MAX {
-                d[dof] = sol.x[c];
+        let (sol, qp, g, d) = loop {
+            let t0 = Instant::now();
+            let (qp, g) = build_qp(mesh, energy, dofs, &rows, &y, eps_qp, trust, settings)?;
+            res.t_assembly_s += t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            let sol = backend.solve(&qp, warm.as_ref())?;
+            res.t_solve_s += t1.elapsed().as_secs_f64();
+            res.backend_iterations += sol.iterations;
+            res.qp_status = sol.status;
+            if sol.status != QpStatus::Solved {
+                break 'inner;
             }
-        }
+            let mut d = vec![0.0; y.len()];
+            for (dof, &c) in dofs.col.iter().enumerate() {
+                if c != usize::MAX {
+                    d[dof] = sol.x[c];
+                    // The backend meets the box to its tolerance; the box is exact (the pairs
+                    // left out of the rows rely on it), so clamp into it.
+                    if let Some(tb) = trust {
+                        let off = tb.psi[dof] - y[dof];
+                        d[dof] = d[dof].clamp(off - tb.delta, off + tb.delta);
+                    }
+                }
+            }
+            if let Some(oracle) = oracle.as_mut() {
+                let tp = Instant::now();
+                let full: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + b).collect();
+                let added = oracle(&full, &rows);
+                res.t_pairs_s += tp.elapsed().as_secs_f64();
+                if !added.is_empty() {
+                    rows.extend(added);
+                    res.lazy_rounds += 1;
+                    warm = None;
+                    continue;
+                }
+            }
+            break (sol, qp, g, d);
+        };
+        res.multipliers = (0..rows.len())
+            .map(|r| [-sol.y[2 * r], -sol.y[2 * r + 1]])
+            .collect();
         let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
         if slope >= 0.0 {
             // d = 0 up to round-off: y is optimal for the model.
             break;
         }
+        // y and y + d both lie in T(ψ) (the oracle checked y + d against all of it), so the
+        // segment does; the line search still checks the carried rows exactly.
         let mut t = 1.0;
         let mut accepted = None;
         for _ in 0..=settings.max_halvings {
             let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
             let jt = energy.value(&trial);
-            if jt.is_finite() && jt <= jy + 1e-4 * t * slope && min_slack(rows, &trial, eps) >= 0.0
+            if jt.is_finite() && jt <= jy + 1e-4 * t * slope && min_slack(&rows, &trial, eps) >= 0.0
             {
                 accepted = Some((trial, jt));
                 break;
@@ -278,6 +347,10 @@ pub fn solve_subproblem(
             }
         }
     }
+    if res.multipliers.len() != rows.len() {
+        res.multipliers = vec![[0.0; 2]; rows.len()];
+    }
+    res.rows = rows;
     res.y = y;
     res.energy = jy;
     Ok(res)
