@@ -27,10 +27,18 @@ struct Cli {
     command: Option<Command>,
 }
 
+mod scaling_cmd;
+
 #[derive(Subcommand)]
 enum Command {
     /// Run the outer loop on a scene and write a run directory.
     Run(RunArgs),
+    /// The scaling experiment: time per outer iteration, pairs, rows and peak memory against
+    /// the number of vertices, per pruning mode (CSV + log-log SVG).
+    Scaling(scaling_cmd::ScalingArgs),
+    /// One case of the scaling experiment (run by `scaling` in a child process).
+    #[command(hide = true)]
+    ScalingCase(scaling_cmd::CaseArgs),
 }
 
 #[derive(clap::Args, Clone)]
@@ -372,9 +380,11 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Run(a)) => run_cmd(a),
+        Some(Command::Scaling(a)) => scaling_cmd::scaling_cmd(a),
+        Some(Command::ScalingCase(a)) => scaling_cmd::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {
             Some(Command::Run(a)) => run_cmd(a),
-            None => unreachable!("`run` parses to Command::Run"),
+            _ => unreachable!("`run` parses to Command::Run"),
         },
     };
     if let Err(e) = result {

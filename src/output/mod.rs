@@ -5,6 +5,7 @@
 //! directory, which is then renamed over `NAME` (see [`write_atomic`]), so a
 //! reader never sees a half-written file.
 
+pub mod loglog;
 pub mod svg;
 pub mod vtk;
 

@@ -1,0 +1,372 @@
+//! `contactlab scaling`: the scaling experiment of issue 3.
+//!
+//! For each size `n` (elements per membrane of the balloons scene) and pruning mode, one child
+//! process (`contactlab scaling-case`, so that each case's peak memory is its own) runs either
+//! one outer step (`kind = one_step`: time per outer iteration split into pair search, assembly
+//! and solve) or the whole solve (`kind = full`, for the sizes that finish in minutes). Each
+//! finished case is a row of the CSV, written atomically after every case; rows already in the
+//! CSV are skipped, so an interrupted experiment resumes where it stopped. A failed or timed-out
+//! case is a row with its status. At the end: a log–log SVG of the time per outer iteration
+//! against the number of vertices, with fitted growth exponents.
+
+use anyhow::{bail, Context, Result};
+use contactlab::outer::{run, OuterSettings, Pruning, RunStatus};
+use contactlab::output::loglog::{loglog_slope, loglog_svg, Series};
+use contactlab::output::write_atomic;
+use contactlab::scene::balloons::{self, BalloonsParams};
+use contactlab_solvers::{backend_from_name, default_settings};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Arguments of `contactlab scaling`.
+#[derive(clap::Args, Clone)]
+pub struct ScalingArgs {
+    /// Output CSV (the SVG goes beside it, same name with .svg).
+    #[arg(long, default_value = "results/scaling.csv")]
+    out: PathBuf,
+    /// Elements per membrane, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "25,100,400,1600,6400,25600,100000,250000"
+    )]
+    sizes: Vec<usize>,
+    /// Pruning modes, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "lazy,trust-region,all-pairs"
+    )]
+    modes: Vec<String>,
+    /// Largest n run in the all-pairs mode (its rows grow as n²).
+    #[arg(long, default_value_t = 80)]
+    all_pairs_max_n: usize,
+    /// Largest n whose full solve is run (kind = full).
+    #[arg(long, default_value_t = 400)]
+    full_max_n: usize,
+    /// Backend.
+    #[arg(long, default_value = "clarabel")]
+    backend: String,
+    /// Wall-clock limit per case, seconds (the case is killed and recorded as `timeout`).
+    #[arg(long, default_value_t = 1800.0)]
+    case_timeout_s: f64,
+}
+
+/// Arguments of the hidden `contactlab scaling-case`.
+#[derive(clap::Args, Clone)]
+pub struct CaseArgs {
+    #[arg(long)]
+    n: usize,
+    #[arg(long)]
+    pruning: String,
+    #[arg(long)]
+    backend: String,
+    #[arg(long)]
+    max_outer: usize,
+}
+
+const COLS: [&str; 17] = [
+    "n",
+    "vertices",
+    "pruning",
+    "kind",
+    "status",
+    "outer_iterations",
+    "inner_iterations",
+    "pairs",
+    "rows",
+    "t_pairs_s",
+    "t_assembly_s",
+    "t_solve_s",
+    "t_step_s",
+    "wall_time_s",
+    "peak_rss_mb",
+    "final_energy",
+    "backend",
+];
+
+/// Peak resident set size of this process in MiB (`VmHWM`), 0 where unavailable.
+fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+/// The child: one case, one JSON object on stdout.
+pub fn case_cmd(a: CaseArgs) -> Result<()> {
+    let pruning = Pruning::from_name(&a.pruning)
+        .with_context(|| format!("unknown pruning {:?}", a.pruning))?;
+    let scene = balloons::build(&BalloonsParams {
+        n: a.n,
+        ..Default::default()
+    })?;
+    let mut backend = backend_from_name(&a.backend, &default_settings(&a.backend))?;
+    let settings = OuterSettings {
+        max_outer: a.max_outer,
+        pruning,
+        ..Default::default()
+    };
+    let mut first = None;
+    let res = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        backend.as_mut(),
+        &settings,
+        &mut |r, _| {
+            if r.iteration == 1 {
+                first = Some(r.clone());
+            }
+        },
+    )?;
+    let f = first.context("no outer step was taken")?;
+    let status = if a.max_outer == 1 && res.status == RunStatus::MaxOuterIterations {
+        "one_step_done"
+    } else {
+        res.status.as_str()
+    };
+    let row = serde_json::json!({
+        "n": a.n,
+        "vertices": scene.mesh.nv(),
+        "pruning": pruning.as_str(),
+        "kind": if a.max_outer == 1 { "one_step" } else { "full" },
+        "status": status,
+        "outer_iterations": res.outer_iterations,
+        "inner_iterations": if a.max_outer == 1 { f.inner_iterations } else { res.inner_iterations },
+        "pairs": f.pairs,
+        "rows": f.rows,
+        "t_pairs_s": f.t_pairs_s,
+        "t_assembly_s": f.t_assembly_s,
+        "t_solve_s": f.t_solve_s,
+        "t_step_s": f.t_pairs_s + f.t_assembly_s + f.t_solve_s,
+        "wall_time_s": res.wall_time_s,
+        "peak_rss_mb": peak_rss_mb(),
+        "final_energy": res.energy,
+        "backend": a.backend,
+    });
+    println!("{row}");
+    Ok(())
+}
+
+fn read_rows(path: &PathBuf) -> Result<Vec<BTreeMap<String, String>>> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let mut rd =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let headers = rd.headers()?.clone();
+    let mut rows = Vec::new();
+    for (i, rec) in rd.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: bad row {}", path.display(), i + 2))?;
+        rows.push(
+            headers
+                .iter()
+                .zip(rec.iter())
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect(),
+        );
+    }
+    Ok(rows)
+}
+
+fn write_rows(path: &PathBuf, rows: &[BTreeMap<String, String>]) -> Result<()> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(COLS)?;
+    for r in rows {
+        w.write_record(COLS.iter().map(|c| r.get(*c).map_or("", |v| v.as_str())))?;
+    }
+    write_atomic(path, &w.into_inner()?)?;
+    Ok(())
+}
+
+fn key(r: &BTreeMap<String, String>) -> (usize, String, String) {
+    (
+        r.get("n").and_then(|v| v.parse().ok()).unwrap_or(0),
+        r.get("pruning").cloned().unwrap_or_default(),
+        r.get("kind").cloned().unwrap_or_default(),
+    )
+}
+
+/// Runs one case in a child process with a time limit.
+fn run_case(
+    n: usize,
+    mode: &str,
+    backend: &str,
+    max_outer: usize,
+    timeout: f64,
+) -> Result<BTreeMap<String, String>> {
+    let exe = std::env::current_exe()?;
+    let mut child = Command::new(exe)
+        .args([
+            "scaling-case",
+            "--n",
+            &n.to_string(),
+            "--pruning",
+            mode,
+            "--backend",
+            backend,
+            "--max-outer",
+            &max_outer.to_string(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    let start = Instant::now();
+    let fail = |status: String| -> BTreeMap<String, String> {
+        [
+            ("n", n.to_string()),
+            ("pruning", mode.to_string()),
+            (
+                "kind",
+                if max_outer == 1 { "one_step" } else { "full" }.to_string(),
+            ),
+            ("status", status),
+            (
+                "wall_time_s",
+                format!("{:.1}", start.elapsed().as_secs_f64()),
+            ),
+            ("backend", backend.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    };
+    loop {
+        if let Some(st) = child.try_wait()? {
+            let out = child.wait_with_output()?;
+            if !st.success() {
+                let err = String::from_utf8_lossy(&out.stderr);
+                let last = err.lines().last().unwrap_or("").replace(',', ";");
+                return Ok(fail(format!("failed: {last}")));
+            }
+            let v: serde_json::Value =
+                serde_json::from_slice(&out.stdout).context("scaling-case printed no JSON")?;
+            let obj = v
+                .as_object()
+                .context("scaling-case JSON is not an object")?;
+            return Ok(obj
+                .iter()
+                .map(|(k, v)| {
+                    let s = match v {
+                        serde_json::Value::String(s) => s.clone(),
+                        other => other.to_string(),
+                    };
+                    (k.clone(), s)
+                })
+                .collect());
+        }
+        if start.elapsed().as_secs_f64() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Ok(fail(format!("timeout after {timeout} s")));
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// `contactlab scaling`.
+pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
+    for m in &a.modes {
+        if Pruning::from_name(m).is_none() {
+            bail!("--modes: unknown pruning {m:?} (expected lazy, trust-region, all-pairs)");
+        }
+    }
+    if let Some(&bad) = a.sizes.iter().find(|&&n| n < 2) {
+        bail!("--sizes: {bad} elements per membrane is too few (at least 2)");
+    }
+    if !(a.case_timeout_s > 0.0) {
+        bail!("--case-timeout-s must be > 0, got {}", a.case_timeout_s);
+    }
+    backend_from_name(&a.backend, &default_settings(&a.backend))?;
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let mut rows = read_rows(&a.out)?;
+    let mut cases = Vec::new();
+    for &n in &a.sizes {
+        for m in &a.modes {
+            if m == "all-pairs" && n > a.all_pairs_max_n {
+                continue;
+            }
+            cases.push((n, m.clone(), 1usize));
+            if n <= a.full_max_n {
+                cases.push((n, m.clone(), OuterSettings::default().max_outer));
+            }
+        }
+    }
+    let total = cases.len();
+    for (i, (n, m, max_outer)) in cases.into_iter().enumerate() {
+        let kind = if max_outer == 1 { "one_step" } else { "full" };
+        if rows
+            .iter()
+            .any(|r| key(r) == (n, m.clone(), kind.to_string()))
+        {
+            eprintln!("[{}/{total}] n={n} {m} {kind}: in the CSV, skipped", i + 1);
+            continue;
+        }
+        eprint!("[{}/{total}] n={n} {m} {kind} ... ", i + 1);
+        let _ = std::io::stderr().flush();
+        let row = run_case(n, &m, &a.backend, max_outer, a.case_timeout_s)?;
+        eprintln!(
+            "{} (step {} s, wall {} s, peak {} MiB)",
+            row.get("status").map_or("", |s| s.as_str()),
+            row.get("t_step_s").map_or("-", |s| s.as_str()),
+            row.get("wall_time_s").map_or("-", |s| s.as_str()),
+            row.get("peak_rss_mb").map_or("-", |s| s.as_str()),
+        );
+        rows.push(row);
+        rows.sort_by_key(key);
+        write_rows(&a.out, &rows)?;
+    }
+    // The picture and the fitted exponents, from every finished one-step row in the CSV.
+    let mut series = Vec::new();
+    for m in ["lazy", "trust-region", "all-pairs"] {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| {
+                r.get("pruning").map(|s| s.as_str()) == Some(m)
+                    && r.get("kind").map(|s| s.as_str()) == Some("one_step")
+                    && r.get("status").map(|s| s.as_str()) == Some("one_step_done")
+            })
+            .filter_map(|r| {
+                Some((
+                    r.get("vertices")?.parse().ok()?,
+                    r.get("t_step_s")?.parse().ok()?,
+                ))
+            })
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let slope = loglog_slope(&pts);
+        let label = match slope {
+            Some(s) => format!("{m} (slope {s:.2})"),
+            None => m.to_string(),
+        };
+        println!(
+            "{m}: time per outer iteration ~ N^{} over {} sizes",
+            slope.map_or("?".into(), |s| format!("{s:.3}")),
+            pts.len()
+        );
+        series.push(Series { label, points: pts });
+    }
+    let svg = loglog_svg(
+        &series,
+        &format!("balloons, first outer step, {}", a.backend),
+        "vertices N",
+        "time of one outer iteration (s)",
+    );
+    let svg_path = a.out.with_extension("svg");
+    write_atomic(&svg_path, svg.as_bytes())?;
+    println!("wrote {} and {}", a.out.display(), svg_path.display());
+    Ok(())
+}
