@@ -70,6 +70,9 @@ struct RunArgs {
     /// Which pairs of T(ψ) the sub-problems carry: lazy (default), trust-region, all-pairs.
     #[arg(long, default_value = "lazy", value_parser = parse_pruning)]
     pruning: Pruning,
+    /// Lazy rows: initial working-set radius cap relative to the mean edge length (lazy only).
+    #[arg(long, default_value_t = 0.25)]
+    lazy_start: f64,
     /// Initial trust-region half-width δ0 relative to the mean edge length (trust-region only).
     #[arg(long, default_value_t = 1.0)]
     trust_delta0: f64,
@@ -180,6 +183,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         tol_j: a.tol_j,
         max_outer: a.max_outer,
         pruning: a.pruning,
+        lazy_start: a.lazy_start,
         trust: TrustSettings {
             delta0: a.trust_delta0,
             ..Default::default()
@@ -189,6 +193,9 @@ fn run_cmd(a: RunArgs) -> Result<()> {
     settings.inner.max_inner = a.max_inner;
     if a.max_inner == 0 {
         bail!("--max-inner must be >= 1, got 0");
+    }
+    if !(a.lazy_start >= 0.0 && a.lazy_start.is_finite()) {
+        bail!("--lazy-start must be finite and >= 0, got {}", a.lazy_start);
     }
     if !(a.trust_delta0 > 0.0 && a.trust_delta0.is_finite()) {
         bail!(

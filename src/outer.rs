@@ -83,6 +83,11 @@ pub struct OuterSettings {
     pub max_outer: usize,
     /// Which pairs the sub-problems carry.
     pub pruning: Pruning,
+    /// Lazy rows: the initial working set of an outer step holds the pairs closer than
+    /// `ε + δ_QP + min(D_prev, lazy_start·h̄)` (`D_prev` the largest vertex displacement of the
+    /// previous step, h̄ the mean edge length). Any value gives the same iterates; it trades
+    /// QP size against re-solves.
+    pub lazy_start: f64,
     /// Trust-region settings (used with [`Pruning::TrustRegion`]).
     pub trust: TrustSettings,
     /// Inner loop settings.
@@ -95,6 +100,7 @@ impl Default for OuterSettings {
             tol_j: 1e-10,
             max_outer: 2000,
             pruning: Pruning::Lazy,
+            lazy_start: 0.25,
             trust: TrustSettings::default(),
             inner: InnerSettings::default(),
         }
@@ -349,11 +355,15 @@ pub fn run(
         // never given rows).
         let pairs: Vec<PointEdgePair> = match settings.pruning {
             Pruning::AllPairs => all_pairs.clone(),
-            // Start from the pairs that the last step's displacement could reach.
-            Pruning::Lazy => point_edge_near(mesh, &x, &[], &vec![eps_qp + d_prev; ne], true)
-                .into_iter()
-                .map(|p| p.pair)
-                .collect(),
+            // Start from the pairs that the last step's displacement could reach, within
+            // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
+            Pruning::Lazy => {
+                let r = eps_qp + d_prev.min(settings.lazy_start * hbar);
+                point_edge_near(mesh, &x, &[], &vec![r; ne], true)
+                    .into_iter()
+                    .map(|p| p.pair)
+                    .collect()
+            }
             // Inside the box a row moves by at most 2√2·δ: farther pairs cannot be violated.
             Pruning::TrustRegion => {
                 let r = eps_qp + 2.0 * std::f64::consts::SQRT_2 * delta * (1.0 + 1e-9);

@@ -17,7 +17,7 @@ use contactlab::scene::balloons::{self, BalloonsParams};
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -157,7 +157,7 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
     Ok(())
 }
 
-fn read_rows(path: &PathBuf) -> Result<Vec<BTreeMap<String, String>>> {
+fn read_rows(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
     if !path.exists() {
         return Ok(Vec::new());
     }
@@ -178,7 +178,7 @@ fn read_rows(path: &PathBuf) -> Result<Vec<BTreeMap<String, String>>> {
     Ok(rows)
 }
 
-fn write_rows(path: &PathBuf, rows: &[BTreeMap<String, String>]) -> Result<()> {
+fn write_rows(path: &Path, rows: &[BTreeMap<String, String>]) -> Result<()> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(COLS)?;
     for r in rows {
@@ -283,7 +283,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
     if let Some(&bad) = a.sizes.iter().find(|&&n| n < 2) {
         bail!("--sizes: {bad} elements per membrane is too few (at least 2)");
     }
-    if !(a.case_timeout_s > 0.0) {
+    if a.case_timeout_s.is_nan() || a.case_timeout_s <= 0.0 {
         bail!("--case-timeout-s must be > 0, got {}", a.case_timeout_s);
     }
     backend_from_name(&a.backend, &default_settings(&a.backend))?;

@@ -1,0 +1,137 @@
+//! Criterion benches of the broad phase and of the pruned QP assembly on the balloons scene.
+//!
+//! Three sizes, `n ∈ {1 000, 10 000, 100 000}` elements per membrane (about `4n` vertices, so
+//! ~4·10³, 4·10⁴ and 4·10⁵ vertices), all at the scene's initial configuration `x0`:
+//!
+//! - `broad_phase/point_edge_near`: the pair search of a lazy outer step, radius
+//!   `ε_qp + h̄` on every edge (`ε_qp = ε(1 + 10⁻⁶) + 10⁻¹¹`, `h̄` the mean contact edge length),
+//!   pairs with both ends fixed skipped;
+//! - `broad_phase/min_distance`: the exact admissibility check of every iterate,
+//!   `min_distance_near(mesh, x0, 2ε, true)`;
+//! - `assembly/pruned_qp`: the rows of the pairs found by the first bench
+//!   (`point_edge_rows`) then `build_qp` (gradient, projected Hessian, QP matrices); the pairs
+//!   are found once, outside the timed loop.
+//!
+//! Throughput is reported in vertices. Run with
+//!
+//! ```text
+//! source scripts/ensure-cmake.sh && cargo bench --bench pruning
+//! ```
+//!
+//! (append `-- <filter>` to run a subset, e.g. `-- broad_phase`). Criterion's output stays in
+//! `target/criterion/`; no HTML report is produced.
+
+use std::time::Duration;
+
+use contactlab::broad_phase::{min_distance_near, point_edge_near};
+use contactlab::outer::mean_edge_length;
+use contactlab::pairs::PointEdgePair;
+use contactlab::rows::point_edge_rows;
+use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::scene::Scene;
+use contactlab::subproblem::{build_qp, DofMap, InnerSettings};
+use criterion::{
+    black_box, criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
+
+/// Elements per membrane.
+const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
+
+/// One size: the scene, the QP level and the broad-phase radius per edge.
+struct Fixture {
+    n: usize,
+    scene: Scene,
+    eps_qp: f64,
+    r_edge: Vec<f64>,
+}
+
+impl Fixture {
+    fn new(n: usize) -> Fixture {
+        let scene = build(&BalloonsParams {
+            n,
+            ..Default::default()
+        })
+        .expect("balloons scene");
+        let settings = InnerSettings::default();
+        let eps_qp = scene.eps * (1.0 + settings.margin_rel) + settings.margin_abs;
+        let r = eps_qp + mean_edge_length(&scene.mesh, &scene.x0);
+        let r_edge = vec![r; scene.mesh.edges.len()];
+        Fixture {
+            n,
+            scene,
+            eps_qp,
+            r_edge,
+        }
+    }
+
+    /// The pairs of a lazy outer step at `x0`.
+    fn pairs(&self) -> Vec<PointEdgePair> {
+        point_edge_near(&self.scene.mesh, &self.scene.x0, &[], &self.r_edge, true)
+            .into_iter()
+            .map(|p| p.pair)
+            .collect()
+    }
+}
+
+fn configure(group: &mut BenchmarkGroup<'_, criterion::measurement::WallTime>) {
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+}
+
+fn benches(c: &mut Criterion) {
+    let fixtures: Vec<Fixture> = SIZES.iter().map(|&n| Fixture::new(n)).collect();
+
+    let mut group = c.benchmark_group("broad_phase/point_edge_near");
+    configure(&mut group);
+    for f in &fixtures {
+        let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
+        group.throughput(Throughput::Elements(mesh.nv() as u64));
+        group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
+            b.iter(|| point_edge_near(mesh, black_box(x), &[], &f.r_edge, true))
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("broad_phase/min_distance");
+    configure(&mut group);
+    for f in &fixtures {
+        let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
+        group.throughput(Throughput::Elements(mesh.nv() as u64));
+        group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
+            b.iter(|| min_distance_near(mesh, black_box(x), 2.0 * f.scene.eps, true))
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("assembly/pruned_qp");
+    configure(&mut group);
+    let settings = InnerSettings::default();
+    for f in &fixtures {
+        let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
+        let dofs = DofMap::new(mesh);
+        let pairs = f.pairs();
+        group.throughput(Throughput::Elements(mesh.nv() as u64));
+        group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
+            b.iter(|| {
+                let rows = point_edge_rows(mesh, black_box(x), &pairs).expect("x0 admissible");
+                build_qp(
+                    mesh,
+                    &f.scene.energy,
+                    &dofs,
+                    &rows,
+                    x,
+                    f.eps_qp,
+                    None,
+                    &settings,
+                )
+                .expect("QP assembly")
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(pruning, benches);
+criterion_main!(pruning);
