@@ -79,6 +79,9 @@ struct RunArgs {
     /// Inner (Newton-type) steps per T(ψ) at most; 1 gives inexact sub-problems.
     #[arg(long, default_value_t = 50)]
     max_inner: usize,
+    /// Do not warm-start the QP duals (OSQP, Uzawa; Clarabel never warm-starts).
+    #[arg(long)]
+    no_warm_start: bool,
     /// Relative energy tolerance of the outer stopping rule.
     #[arg(long, default_value_t = 1e-10)]
     tol_j: f64,
@@ -191,6 +194,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         ..Default::default()
     };
     settings.inner.max_inner = a.max_inner;
+    settings.inner.warm_start = !a.no_warm_start;
     if a.max_inner == 0 {
         bail!("--max-inner must be >= 1, got 0");
     }

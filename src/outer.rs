@@ -12,7 +12,7 @@ use crate::rows::{point_edge_row, point_edge_rows, PointEdgeRow};
 use crate::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -349,6 +349,8 @@ pub fn run(
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
     let eps_qp = eps + margin;
     let ne = mesh.edges.len();
+    // The last sub-problem's multipliers by pair: the next step's warm start.
+    let mut last_mult: HashMap<PointEdgePair, [f64; 2]> = HashMap::new();
     for k in 1..=settings.max_outer {
         let tp = Instant::now();
         // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
@@ -387,6 +389,7 @@ pub fn run(
             eps,
             trust,
             (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
+            Some(&last_mult),
             backend,
             &settings.inner,
         )?;
@@ -455,6 +458,12 @@ pub fn run(
         jx = sub.energy;
         result.energy = jx;
         result.min_distance = md;
+        last_mult = sub
+            .rows
+            .iter()
+            .zip(&sub.multipliers)
+            .map(|(r, m)| (r.pair, *m))
+            .collect();
         result.last_rows = sub.rows;
         result.multipliers = sub.multipliers;
         if sub.qp_status != QpStatus::Solved {

@@ -24,8 +24,10 @@
 
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;
+use crate::pairs::PointEdgePair;
 use crate::rows::{min_slack, PointEdgeRow};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// Settings of the inner (sub-problem) loop.
@@ -46,6 +48,10 @@ pub struct InnerSettings {
     pub margin_abs: f64,
     /// Maximum number of step halvings in the line search.
     pub max_halvings: usize,
+    /// Warm-start each QP's duals: from the previous inner QP, through lazy re-solves (new rows
+    /// start at 0), and across outer steps by pair identity. Used by OSQP and Uzawa; Clarabel
+    /// ignores it. The primal guess is always `d = 0`.
+    pub warm_start: bool,
 }
 
 impl Default for InnerSettings {
@@ -58,6 +64,7 @@ impl Default for InnerSettings {
             margin_rel: 1e-6,
             margin_abs: 1e-11,
             max_halvings: 40,
+            warm_start: true,
         }
     }
 }
@@ -243,10 +250,12 @@ pub fn solve_subproblem(
     eps: f64,
     trust: Option<TrustBox>,
     mut oracle: Option<RowOracle>,
+    warm_pairs: Option<&HashMap<PointEdgePair, [f64; 2]>>,
     backend: &mut dyn QpBackend,
     settings: &InnerSettings,
 ) -> Result<SubproblemResult, QpError> {
     let mut rows = rows;
+    let warm_pairs = warm_pairs.filter(|_| settings.warm_start);
     let eps_qp = eps + settings.margin_rel * eps + settings.margin_abs;
     let mut y = start.to_vec();
     let mut jy = energy.value(&y);
@@ -271,6 +280,22 @@ pub fn solve_subproblem(
             let t0 = Instant::now();
             let (qp, g) = build_qp(mesh, energy, dofs, &rows, &y, eps_qp, trust, settings)?;
             res.t_assembly_s += t0.elapsed().as_secs_f64();
+            if warm.is_none() && res.inner_iterations == 1 && res.lazy_rounds == 0 {
+                // First QP of the outer step: the last step's multipliers, by pair.
+                warm = warm_pairs.map(|map| {
+                    let mut yw = vec![0.0; qp.m()];
+                    for (r, row) in rows.iter().enumerate() {
+                        if let Some(mu) = map.get(&row.pair) {
+                            yw[2 * r] = -mu[0];
+                            yw[2 * r + 1] = -mu[1];
+                        }
+                    }
+                    WarmStart {
+                        x: Vec::new(),
+                        y: yw,
+                    }
+                });
+            }
             let t1 = Instant::now();
             let sol = backend.solve(&qp, warm.as_ref())?;
             res.t_solve_s += t1.elapsed().as_secs_f64();
@@ -297,9 +322,19 @@ pub fn solve_subproblem(
                 let added = oracle(&full, &rows);
                 res.t_pairs_s += tp.elapsed().as_secs_f64();
                 if !added.is_empty() {
+                    // Keep this QP's duals for the carried rows; the new rows start at 0.
+                    let old = 2 * rows.len();
                     rows.extend(added);
                     res.lazy_rounds += 1;
-                    warm = None;
+                    warm = settings.warm_start.then(|| {
+                        let mut yw = sol.y[..old].to_vec();
+                        yw.resize(2 * rows.len(), 0.0);
+                        yw.extend_from_slice(&sol.y[old..]);
+                        WarmStart {
+                            x: Vec::new(),
+                            y: yw,
+                        }
+                    });
                     continue;
                 }
             }
@@ -332,7 +367,7 @@ pub fn solve_subproblem(
                 let dec = jy - jt;
                 y = trial;
                 jy = jt;
-                warm = Some(WarmStart {
+                warm = settings.warm_start.then(|| WarmStart {
                     x: vec![0.0; qp.n()],
                     y: sol.y.clone(),
                 });
