@@ -4,7 +4,7 @@
 //! ~4·10³, 4·10⁴ and 4·10⁵ vertices), all at the scene's initial configuration `x0`:
 //!
 //! - `broad_phase/point_edge_near`: the pair search of a lazy outer step, radius
-//!   `ε_qp + h̄` on every edge (`ε_qp = ε(1 + 10⁻⁶) + 10⁻¹¹`, `h̄` the mean contact edge length),
+//!   `ε_qp + h̄` on every edge (`ε_qp = ε(1 + 10⁻⁶) + 10⁻¹¹`, `h̄` the median contact edge length),
 //!   pairs with both ends fixed skipped;
 //! - `broad_phase/min_distance`: the exact admissibility check of every iterate,
 //!   `min_distance_near(mesh, x0, 2ε, true)`;
@@ -24,7 +24,7 @@
 use std::time::Duration;
 
 use contactlab::broad_phase::{min_distance_near, point_edge_near};
-use contactlab::outer::mean_edge_length;
+use contactlab::outer::median_edge_length;
 use contactlab::pairs::PointEdgePair;
 use contactlab::rows::point_edge_rows;
 use contactlab::scene::balloons::{build, BalloonsParams};
@@ -54,7 +54,7 @@ impl Fixture {
         .expect("balloons scene");
         let settings = InnerSettings::default();
         let eps_qp = scene.eps * (1.0 + settings.margin_rel) + settings.margin_abs;
-        let r = eps_qp + mean_edge_length(&scene.mesh, &scene.x0);
+        let r = eps_qp + median_edge_length(&scene.mesh, &scene.x0);
         let r_edge = vec![r; scene.mesh.edges.len()];
         Fixture {
             n,

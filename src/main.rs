@@ -70,10 +70,10 @@ struct RunArgs {
     /// Which pairs of T(ψ) the sub-problems carry: lazy (default), trust-region, all-pairs.
     #[arg(long, default_value = "lazy", value_parser = parse_pruning)]
     pruning: Pruning,
-    /// Lazy rows: initial working-set radius cap relative to the mean edge length (lazy only).
+    /// Lazy rows: initial working-set radius cap relative to the median edge length (lazy only).
     #[arg(long, default_value_t = 0.25)]
     lazy_start: f64,
-    /// Initial trust-region half-width δ0 relative to the mean edge length (trust-region only).
+    /// Initial trust-region half-width δ0 relative to the median edge length (trust-region only).
     #[arg(long, default_value_t = 1.0)]
     trust_delta0: f64,
     /// Inner (Newton-type) steps per T(ψ) at most; 1 gives inexact sub-problems.

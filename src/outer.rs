@@ -51,7 +51,7 @@ impl Pruning {
     }
 }
 
-/// Trust-region settings, lengths relative to the mean contact edge length `h̄` of ψ_0.
+/// Trust-region settings, lengths relative to the median contact edge length `h̄` of ψ_0.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrustSettings {
@@ -68,7 +68,7 @@ impl Default for TrustSettings {
         TrustSettings {
             delta0: 1.0,
             delta_min: 1.0 / 64.0,
-            delta_max: 64.0,
+            delta_max: 4.0,
         }
     }
 }
@@ -85,7 +85,7 @@ pub struct OuterSettings {
     pub pruning: Pruning,
     /// Lazy rows: the initial working set of an outer step holds the pairs closer than
     /// `ε + δ_QP + min(D_prev, lazy_start·h̄)` (`D_prev` the largest vertex displacement of the
-    /// previous step, h̄ the mean edge length). Any value gives the same iterates; it trades
+    /// previous step, h̄ the median edge length). Any value gives the same iterates; it trades
     /// QP size against re-solves.
     pub lazy_start: f64,
     /// Trust-region settings (used with [`Pruning::TrustRegion`]).
@@ -221,16 +221,20 @@ pub struct RunResult {
     pub wall_time_s: f64,
 }
 
-/// Mean length of the contact edges at `x` (the `h̄` of [`TrustSettings`]).
-pub fn mean_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
-    if mesh.edges.is_empty() {
-        return 0.0;
-    }
-    mesh.edges
+/// Median length of the contact edges at `x`: the `h̄` of [`TrustSettings`] and of
+/// [`OuterSettings::lazy_start`] (the median, not the mean, so that a few long edges, such as
+/// the balloons' box, do not set the scale).
+pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
+    let mut l: Vec<f64> = mesh
+        .edges
         .iter()
         .map(|e| (Mesh::p2(x, e[0]) - Mesh::p2(x, e[1])).norm())
-        .sum::<f64>()
-        / mesh.edges.len() as f64
+        .collect();
+    if l.is_empty() {
+        return 0.0;
+    }
+    let mid = l.len() / 2;
+    *l.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// Per-vertex Euclidean displacement `|y(v) − x(v)|`.
@@ -311,7 +315,7 @@ pub fn run(
     if !jx.is_finite() {
         return Err(RunError::BadInitialEnergy(jx));
     }
-    let hbar = mean_edge_length(mesh, x0);
+    let hbar = median_edge_length(mesh, x0);
     let mut delta = settings.trust.delta0 * hbar;
     let mut d_prev = hbar;
     let t_pairs0 = t0.elapsed().as_secs_f64();
