@@ -232,7 +232,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         if let Some(&(_, jprev)) = energies.last() {
             monotone &= rec.energy <= jprev;
         }
-        admissible &= rec.min_distance >= eps;
+        admissible &= rec.admissible;
         energies.push((rec.iteration, rec.energy));
         snapshots.push((rec.iteration, x.to_vec()));
         let mut step = || -> Result<()> {
