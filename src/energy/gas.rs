@@ -22,7 +22,9 @@
 //! `±1`, so `M_i` has eigenvalues `±C/(2V)` and its PSD part is
 //! `(M_i + |M_i|)/2 = (k S + |k| I)/2`, used when `projected = true`.
 
-use super::{Energy, Hessian, RankOne};
+use super::{chunked_sum, chunked_triplets, push_block, Energy, Hessian, RankOne};
+use rayon::prelude::*;
+use std::collections::hash_map::{Entry, HashMap};
 
 const DIM: usize = 2;
 
@@ -60,35 +62,63 @@ impl GasEnergy {
     /// Signed area `V(x)` (positive in the reference orientation).
     pub fn area(&self, x: &[f64]) -> f64 {
         let n = self.polygon.len();
-        let mut s = 0.0;
-        for i in 0..n {
-            let (xi, yi) = self.xy(x, i);
-            let (xj, yj) = self.xy(x, i + 1);
-            s += xi * yj - xj * yi;
-        }
+        let s = chunked_sum(n, |r| {
+            let mut s = 0.0;
+            for i in r {
+                let (xi, yi) = self.xy(x, i);
+                let (xj, yj) = self.xy(x, i + 1);
+                s += xi * yj - xj * yi;
+            }
+            s
+        });
         self.sign * 0.5 * s
     }
 
-    /// `∇V(x)` as sparse `(dof, value)` pairs (duplicates summed if a vertex repeats).
+    /// `∇V(x)` as sparse `(dof, value)` pairs, in polygon order (duplicates summed into the
+    /// first occurrence if a vertex repeats).
     pub fn area_gradient(&self, x: &[f64]) -> Vec<(usize, f64)> {
         let n = self.polygon.len();
+        // per-vertex terms, in parallel (each independent of the others)
+        let terms: Vec<[(usize, f64); 2]> = (0..n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let v = self.polygon[i];
+                let (xp, yp) = self.xy(x, i + n - 1);
+                let (xn, yn) = self.xy(x, i + 1);
+                let gx = self.sign * 0.5 * (yn - yp);
+                let gy = self.sign * 0.5 * (xp - xn);
+                [(DIM * v, gx), (DIM * v + 1, gy)]
+            })
+            .collect();
+        if !has_repeats(&self.polygon) {
+            return terms.into_iter().flatten().collect();
+        }
+        // a vertex repeats: merge sequentially, in polygon order
         let mut w: Vec<(usize, f64)> = Vec::with_capacity(DIM * n);
-        for i in 0..n {
-            let v = self.polygon[i];
-            let (xp, yp) = self.xy(x, i + n - 1);
-            let (xn, yn) = self.xy(x, i + 1);
-            let gx = self.sign * 0.5 * (yn - yp);
-            let gy = self.sign * 0.5 * (xp - xn);
-            for (dof, val) in [(DIM * v, gx), (DIM * v + 1, gy)] {
-                if let Some(e) = w.iter_mut().find(|e| e.0 == dof) {
-                    e.1 += val;
-                } else {
-                    w.push((dof, val));
+        let mut pos: HashMap<usize, usize> = HashMap::with_capacity(n);
+        for (i, t) in terms.into_iter().enumerate() {
+            match pos.entry(self.polygon[i]) {
+                Entry::Occupied(p) => {
+                    let p = *p.get();
+                    w[p].1 += t[0].1;
+                    w[p + 1].1 += t[1].1;
+                }
+                Entry::Vacant(p) => {
+                    p.insert(w.len());
+                    w.extend(t);
                 }
             }
         }
         w
     }
+}
+
+/// Whether some vertex occurs more than once in `polygon`.
+fn has_repeats(polygon: &[usize]) -> bool {
+    let mut sorted = polygon.to_vec();
+    sorted.par_sort_unstable();
+    sorted.windows(2).any(|p| p[0] == p[1])
 }
 
 impl Energy for GasEnergy {
@@ -127,24 +157,26 @@ impl Energy for GasEnergy {
             w: self.area_gradient(x),
         });
         let k = -self.c * self.sign / (2.0 * v);
-        let mut m = nalgebra::DMatrix::zeros(2 * DIM, 2 * DIM);
+        let mut m = [[0.0; 2 * DIM]; 2 * DIM];
         // S with S² = I
-        m[(0, 3)] = k;
-        m[(3, 0)] = k;
-        m[(1, 2)] = -k;
-        m[(2, 1)] = -k;
+        m[0][3] = k;
+        m[3][0] = k;
+        m[1][2] = -k;
+        m[2][1] = -k;
         if projected {
-            m *= 0.5;
-            for d in 0..2 * DIM {
-                m[(d, d)] = 0.5 * k.abs();
+            for (d, row) in m.iter_mut().enumerate() {
+                for v in row.iter_mut() {
+                    *v *= 0.5;
+                }
+                row[d] = 0.5 * k.abs();
             }
         }
         let n = self.polygon.len();
-        for i in 0..n {
+        chunked_triplets(n, &mut h.triplets, |i, out| {
             let a = self.polygon[i];
             let b = self.polygon[(i + 1) % n];
-            h.add_block(DIM, &[a, b], &m);
-        }
+            push_block(out, DIM, &[a, b], |r, c| m[r][c]);
+        });
     }
 }
 
@@ -263,5 +295,33 @@ mod tests {
         assert_eq!(g.value(&x), f64::INFINITY);
         assert!(g.value(&x0).is_finite());
         assert!((g.value(&x0) - 2f64.ln()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn energy_gas_thread_independent() {
+        use crate::energy::fd_test::{assert_thread_independent, term_bits};
+        use crate::energy::CHUNK;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for reverse in [false, true] {
+            let (gas, x) = config(&mut rng, 5 * CHUNK + 77, reverse);
+            let bits = assert_thread_independent(|| term_bits(&gas, &x));
+            assert!(f64::from_bits(bits[0]).is_finite());
+            assert!(((gas.area(&x) - 4.0 / 3.0) / (4.0 / 3.0)).abs() < 0.05);
+        }
+        // a repeated vertex (the first one closes the polygon again): merged gradient entries
+        let n = 5 * CHUNK + 5;
+        let (mut gas, x) = config(&mut rng, n, false);
+        let w0 = gas.area_gradient(&x);
+        gas.polygon.push(gas.polygon[0]);
+        let w = assert_thread_independent(|| gas.area_gradient(&x));
+        assert_eq!(w.len(), 2 * n);
+        for (k, (a, b)) in w.iter().zip(&w0).enumerate() {
+            assert_eq!(a.0, b.0);
+            if k >= 2 && k < 2 * n - 2 {
+                assert_eq!(a.1, b.1);
+            }
+        }
+        let bits = assert_thread_independent(|| term_bits(&gas, &x));
+        assert!(f64::from_bits(bits[0]).is_finite());
     }
 }

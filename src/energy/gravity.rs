@@ -7,7 +7,8 @@
 //! so with `g = (0, −9.81)` it is `Σ_v m_v · 9.81 · y_v`. Linear in `x`: gradient
 //! `−m_v g`, zero Hessian.
 
-use super::{Energy, Hessian};
+use super::{chunked_sum, Energy, Hessian};
+use rayon::prelude::*;
 
 const DIM: usize = 2;
 
@@ -74,19 +75,26 @@ impl Energy for Gravity {
     }
 
     fn value(&self, x: &[f64]) -> f64 {
-        -self
-            .mass
-            .iter()
-            .enumerate()
-            .map(|(v, m)| m * (self.g[0] * x[DIM * v] + self.g[1] * x[DIM * v + 1]))
-            .sum::<f64>()
+        -chunked_sum(self.mass.len(), |r| {
+            let mut s = 0.0;
+            for v in r {
+                s += self.mass[v] * (self.g[0] * x[DIM * v] + self.g[1] * x[DIM * v + 1]);
+            }
+            s
+        })
     }
 
+    /// Each vertex's dofs get their own contribution: parallel, and the same whatever the
+    /// thread count.
     fn add_gradient(&self, _x: &[f64], g: &mut [f64]) {
-        for (v, m) in self.mass.iter().enumerate() {
-            g[DIM * v] -= m * self.g[0];
-            g[DIM * v + 1] -= m * self.g[1];
-        }
+        g[..DIM * self.mass.len()]
+            .par_chunks_mut(DIM)
+            .with_min_len(1024)
+            .zip(self.mass.par_iter())
+            .for_each(|(gv, m)| {
+                gv[0] -= m * self.g[0];
+                gv[1] -= m * self.g[1];
+            });
     }
 
     /// Zero Hessian: adds nothing.
@@ -133,5 +141,23 @@ mod tests {
         let total: f64 = ge.mass.iter().sum();
         assert!((total - (2.0 + 13f64.sqrt())).abs() < 1e-14);
         assert!((ge.mass[0] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn energy_gravity_thread_independent() {
+        use crate::energy::fd_test::{assert_thread_independent, term_bits};
+        use crate::energy::CHUNK;
+        let nv = 5 * CHUNK + 3;
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let mass: Vec<f64> = (0..nv).map(|_| rng.gen_range(0.1..2.0)).collect();
+        let grav = Gravity::new(mass, [0.3, -9.81]);
+        // one extra unused vertex: its gradient entries stay untouched
+        let x: Vec<f64> = (0..2 * nv + 2).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        let bits = assert_thread_independent(|| term_bits(&grav, &x));
+        assert!(f64::from_bits(bits[0]).is_finite());
+        let mut g = vec![0.0; x.len()];
+        grav.add_gradient(&x, &mut g);
+        assert_eq!(g[2 * nv..], [0.0, 0.0]);
+        assert_eq!(g[2 * (nv - 1) + 1], grav.mass[nv - 1] * 9.81);
     }
 }

@@ -20,7 +20,7 @@
 //! `|F| > 1`, `s > 0` and `H` is positive definite, and it is `0` for `|F| < 1`, so the exact
 //! Hessian is already positive semi-definite: `projected` changes nothing.
 
-use super::{Energy, Hessian};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
 
 /// Tension-only membrane energy of a set of edges (2D).
 #[derive(Clone, Debug)]
@@ -69,55 +69,65 @@ impl Energy for MembraneEnergy {
     }
 
     fn value(&self, x: &[f64]) -> f64 {
-        (0..self.edges.len())
-            .map(|k| {
+        chunked_sum(self.edges.len(), |r| {
+            let mut sum = 0.0;
+            for k in r {
                 let (_, s) = self.edge_state(x, k);
                 if s > 0.0 {
-                    self.mu * self.rest_length[k] * s * s
-                } else {
-                    0.0
+                    sum += self.mu * self.rest_length[k] * s * s;
                 }
-            })
-            .sum()
+            }
+            sum
+        })
     }
 
     fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
-        for k in 0..self.edges.len() {
-            let (e, s) = self.edge_state(x, k);
-            if s <= 0.0 {
-                continue;
-            }
-            let [a, b] = self.edges[k];
-            let c = 4.0 * self.mu * s / self.rest_length[k];
-            for i in 0..DIM {
-                g[DIM * b + i] += c * e[i];
-                g[DIM * a + i] -= c * e[i];
-            }
-        }
+        par_scatter(
+            self.edges.len(),
+            g,
+            |k| {
+                let (e, s) = self.edge_state(x, k);
+                if s <= 0.0 {
+                    return None;
+                }
+                let c = 4.0 * self.mu * s / self.rest_length[k];
+                Some([c * e[0], c * e[1]])
+            },
+            |k, ce, g| {
+                let [a, b] = self.edges[k];
+                for i in 0..DIM {
+                    g[DIM * b + i] += ce[i];
+                    g[DIM * a + i] -= ce[i];
+                }
+            },
+        );
     }
 
     /// Exact Hessian; it is already positive semi-definite, so `projected` is ignored.
     fn add_hessian(&self, x: &[f64], _projected: bool, h: &mut Hessian) {
-        for k in 0..self.edges.len() {
+        chunked_triplets(self.edges.len(), &mut h.triplets, |k, out| {
             let (e, s) = self.edge_state(x, k);
             if s <= 0.0 {
-                continue;
+                return;
             }
-            let [a, b] = self.edges[k];
             let l = self.rest_length[k];
             let c = 4.0 * self.mu / l;
-            let mut m = nalgebra::DMatrix::zeros(2 * DIM, 2 * DIM);
-            for i in 0..DIM {
-                for j in 0..DIM {
-                    let hij = c * (if i == j { s } else { 0.0 } + 2.0 * e[i] * e[j] / (l * l));
-                    m[(i, j)] = hij;
-                    m[(DIM + i, DIM + j)] = hij;
-                    m[(i, DIM + j)] = -hij;
-                    m[(DIM + i, j)] = -hij;
+            let mut hb = [[0.0; DIM]; DIM];
+            for (i, row) in hb.iter_mut().enumerate() {
+                for (j, hij) in row.iter_mut().enumerate() {
+                    *hij = c * (if i == j { s } else { 0.0 } + 2.0 * e[i] * e[j] / (l * l));
                 }
             }
-            h.add_block(DIM, &[a, b], &m);
-        }
+            // block [[H, −H], [−H, H]]
+            push_block(out, DIM, &self.edges[k], |r, q| {
+                let v = hb[r % DIM][q % DIM];
+                if (r < DIM) == (q < DIM) {
+                    v
+                } else {
+                    -v
+                }
+            });
+        });
     }
 }
 
@@ -208,5 +218,28 @@ mod tests {
         // stretched by 2: s = 3, J = μ L s² = 9
         let x = [0.0, 0.0, 2.0, 0.0];
         assert!((m.value(&x) - 9.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn energy_membrane_thread_independent() {
+        use crate::energy::fd_test::{assert_thread_independent, term_bits};
+        use crate::energy::CHUNK;
+        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        let (m, x) = config(&mut rng, 5 * CHUNK + 123);
+        let bits = assert_thread_independent(|| term_bits(&m, &x));
+        assert!(f64::from_bits(bits[0]) > 0.0);
+        // the Hessian is the same sequence of triplets as the element-by-element loop
+        let mut hs = Hessian::default();
+        for k in 0..m.edges.len() {
+            let one = MembraneEnergy {
+                edges: vec![m.edges[k]],
+                rest_length: vec![m.rest_length[k]],
+                mu: m.mu,
+            };
+            one.add_hessian(&x, false, &mut hs);
+        }
+        let mut h = Hessian::default();
+        m.add_hessian(&x, false, &mut h);
+        assert_eq!(h, hs);
     }
 }

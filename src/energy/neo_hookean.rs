@@ -23,8 +23,8 @@
 //! `projected = true` each element Hessian's negative eigenvalues are clamped to zero
 //! (symmetric eigendecomposition).
 
-use super::{Energy, Hessian};
-use nalgebra::{DMatrix, Matrix2, Matrix6};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use nalgebra::{Matrix2, Matrix6};
 
 const DIM: usize = 2;
 
@@ -138,43 +138,57 @@ impl Energy for NeoHookean2d {
     }
 
     fn value(&self, x: &[f64]) -> f64 {
-        let mut s = 0.0;
-        for e in 0..self.triangles.len() {
-            let w = self.energy_density(&self.deformation_gradient(x, e));
-            if w == f64::INFINITY {
-                return f64::INFINITY;
+        chunked_sum(self.triangles.len(), |r| {
+            let mut s = 0.0;
+            for e in r {
+                let w = self.energy_density(&self.deformation_gradient(x, e));
+                if w == f64::INFINITY {
+                    return f64::INFINITY;
+                }
+                s += self.area[e] * w;
             }
-            s += self.area[e] * w;
-        }
-        s
+            s
+        })
     }
 
     /// Inverted elements (energy `+∞`) contribute nothing.
     fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
-        for e in 0..self.triangles.len() {
-            let f = self.deformation_gradient(x, e);
-            let j = f.determinant();
-            if j <= 0.0 {
-                continue;
-            }
-            let Some(fi) = f.try_inverse() else { continue };
-            let fit = fi.transpose();
-            let p = (f - fit) * self.mu + fit * (self.lambda * j.ln());
-            let gop = self.grad_op(e);
-            for (a, &v) in self.triangles[e].iter().enumerate() {
-                for c in 0..DIM {
-                    let s: f64 = (0..DIM).map(|l| p[(c, l)] * gop[a][l]).sum();
-                    g[DIM * v + c] += self.area[e] * s;
+        par_scatter(
+            self.triangles.len(),
+            g,
+            |e| {
+                let f = self.deformation_gradient(x, e);
+                let j = f.determinant();
+                if j <= 0.0 {
+                    return None;
                 }
-            }
-        }
+                let fit = f.try_inverse()?.transpose();
+                let p = (f - fit) * self.mu + fit * (self.lambda * j.ln());
+                let gop = self.grad_op(e);
+                let mut ge = [[0.0; DIM]; 3];
+                for (a, gea) in ge.iter_mut().enumerate() {
+                    for (c, gac) in gea.iter_mut().enumerate() {
+                        let s: f64 = (0..DIM).map(|l| p[(c, l)] * gop[a][l]).sum();
+                        *gac = self.area[e] * s;
+                    }
+                }
+                Some(ge)
+            },
+            |e, ge, g| {
+                for (a, &v) in self.triangles[e].iter().enumerate() {
+                    for c in 0..DIM {
+                        g[DIM * v + c] += ge[a][c];
+                    }
+                }
+            },
+        );
     }
 
     /// Inverted elements contribute nothing.
     fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian) {
-        for e in 0..self.triangles.len() {
+        chunked_triplets(self.triangles.len(), &mut h.triplets, |e, out| {
             let Some(mut he) = self.element_hessian(x, e) else {
-                continue;
+                return;
             };
             if projected {
                 let eig = he.symmetric_eigen();
@@ -186,9 +200,8 @@ impl Energy for NeoHookean2d {
                     he = (he + he.transpose()) * 0.5;
                 }
             }
-            let m = DMatrix::from_column_slice(6, 6, he.as_slice());
-            h.add_block(DIM, &self.triangles[e], &m);
-        }
+            push_block(out, DIM, &self.triangles[e], |r, c| he[(r, c)]);
+        });
     }
 }
 
@@ -196,6 +209,7 @@ impl Energy for NeoHookean2d {
 mod tests {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
+    use nalgebra::DMatrix;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -346,5 +360,63 @@ mod tests {
         let mut g = vec![0.0; 6];
         nh.add_gradient(&x, &mut g);
         assert!(g.iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn energy_neo_hookean_thread_independent() {
+        use crate::energy::fd_test::{assert_thread_independent, term_bits};
+        use crate::energy::CHUNK;
+        // an m×m grid (2(m−1)² > 4 chunks of triangles, mixed orientations) under a random
+        // affine map plus vertex noise; strong enough that some element Hessians are
+        // indefinite
+        let m = 100;
+        assert!(2 * (m - 1) * (m - 1) > 4 * CHUNK);
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        let mut xr = Vec::new();
+        for j in 0..m {
+            for i in 0..m {
+                xr.push(i as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+                xr.push(j as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+            }
+        }
+        let mut tris = Vec::new();
+        for j in 0..m - 1 {
+            for i in 0..m - 1 {
+                let v = m * j + i;
+                if (i + j) % 2 == 0 {
+                    tris.push([v, v + 1, v + m + 1]);
+                    tris.push([v, v + m, v + m + 1]);
+                } else {
+                    tris.push([v, v + 1, v + m]);
+                    tris.push([v + 1, v + m + 1, v + m]);
+                }
+            }
+        }
+        let nh = NeoHookean2d::new(tris, &xr, 1.3, 4.0);
+        let a = Matrix2::new(1.4, 0.3, -0.2, 0.6);
+        let mut x = xr.clone();
+        for v in 0..m * m {
+            let p = a * nalgebra::Vector2::new(xr[2 * v], xr[2 * v + 1]);
+            x[2 * v] = p.x + rng.gen_range(-0.06..0.06);
+            x[2 * v + 1] = p.y + rng.gen_range(-0.06..0.06);
+        }
+        let bits = assert_thread_independent(|| term_bits(&nh, &x));
+        assert!(f64::from_bits(bits[0]).is_finite());
+        let indefinite = (0..nh.triangles.len())
+            .filter(|&e| {
+                nh.element_hessian(&x, e)
+                    .unwrap()
+                    .symmetric_eigenvalues()
+                    .min()
+                    < 0.0
+            })
+            .count();
+        assert!(indefinite > 0, "the projection should be exercised");
+        // one inverted element: +∞, still thread independent
+        let t = nh.triangles[3 * CHUNK + 1];
+        x.swap(2 * t[1], 2 * t[2]);
+        x.swap(2 * t[1] + 1, 2 * t[2] + 1);
+        let bits = assert_thread_independent(|| term_bits(&nh, &x));
+        assert_eq!(f64::from_bits(bits[0]), f64::INFINITY);
     }
 }
