@@ -1,4 +1,5 @@
-//! Broad phase in 2D: a uniform grid over the contact edges, built by sorting cell keys.
+//! Broad phase: a uniform grid over axis-aligned boxes ([`AabbGrid`], any dimension), built by
+//! sorting cell keys; in 2D it finds the `point_edge` pairs and the edge crossings.
 //!
 //! Every contact edge `a` is registered in each grid cell that its axis-aligned bounding box,
 //! inflated by a per-edge radius `r_a`, overlaps; a vertex `x` with radius `r_x` looks up the
@@ -6,11 +7,11 @@
 //! pair with `dist(ψ(x), ψ(a)) ≤ r_x + r_a` (the Euclidean distance bounds the L∞ distance), so
 //! the narrow phase ([`point_edge_distance`], exact) sees every such pair.
 //!
-//! The grid is a sorted vector of `(cell key, edge)` entries (no hash map): building it is a
-//! parallel sort, a lookup a binary search, and the output order (vertex, then edge index) does
-//! not depend on the number of rayon threads. The cell size defaults to the larger of the mean
-//! edge length and twice the mean edge radius, so an edge spans O(1) cells and a cell holds
-//! O(1) edges on the quasi-uniform meshes of the scenes.
+//! The grid is a sorted vector of `(cell key, item)` entries (no hash map): building it is a
+//! parallel sort, a lookup a binary search per run of cells, and the output order (vertex, then
+//! edge index) does not depend on the number of rayon threads. The cell size defaults to the
+//! mean largest side of the registered boxes, so a box spans O(1) cells and a cell holds O(1)
+//! boxes on the quasi-uniform meshes of the scenes.
 //!
 //! The same names run through the layers: `point_edge` pairs here, in [`crate::pairs`], in the
 //! rows of T(ψ) ([`crate::rows`]) and in the diagnostics.
@@ -29,17 +30,28 @@ pub struct NearPair {
     pub distance: f64,
 }
 
-/// Uniform grid over the (inflated) contact edges at one state. See the module documentation.
-pub struct EdgeGrid {
+/// A uniform grid over axis-aligned boxes in `D` dimensions (2 here; 3D primitives —
+/// triangles, edges in space — register their boxes the same way). Items are registered by
+/// index; a query returns the items of every cell the query box overlaps, sorted, without
+/// repetition. A box that would span more than [`MAX_CELLS_PER_BOX`] cells (one vertex moving
+/// far in a lazy check) goes to a short list returned by every query instead, so one outlier
+/// cannot blow the grid up.
+pub struct AabbGrid<const D: usize> {
     cell: f64,
-    origin: [f64; 2],
-    nx: u64,
-    ny: u64,
+    origin: [f64; D],
+    dims: [u64; D],
     keys: Vec<u64>,
-    edges: Vec<u32>,
+    items: Vec<u32>,
+    big: Vec<u32>,
 }
 
-fn edge_box(x: &[f64], e: [usize; 2], r: f64) -> ([f64; 2], [f64; 2]) {
+/// See [`AabbGrid`].
+pub const MAX_CELLS_PER_BOX: u64 = 4096;
+
+/// An axis-aligned box `(lo, hi)`.
+pub type Aabb<const D: usize> = ([f64; D], [f64; D]);
+
+fn edge_box(x: &[f64], e: [usize; 2], r: f64) -> Aabb<2> {
     let (a, b) = (Mesh::p2(x, e[0]), Mesh::p2(x, e[1]));
     (
         [a.x.min(b.x) - r, a.y.min(b.y) - r],
@@ -47,93 +59,131 @@ fn edge_box(x: &[f64], e: [usize; 2], r: f64) -> ([f64; 2], [f64; 2]) {
     )
 }
 
-impl EdgeGrid {
-    /// Registers every contact edge `a` of `mesh` at state `x`, inflated by `r_edge[a]`.
-    /// `cell = None` picks the default cell size (module documentation).
-    pub fn build(mesh: &Mesh, x: &[f64], r_edge: &[f64], cell: Option<f64>) -> EdgeGrid {
-        let ne = mesh.edges.len();
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let mut len_sum = 0.0;
-        let mut r_sum = 0.0;
-        for (a, &e) in mesh.edges.iter().enumerate() {
-            let (l, h) = edge_box(x, e, r_edge[a]);
-            for c in 0..2 {
+impl<const D: usize> AabbGrid<D> {
+    /// Registers `boxes[i]` as item `i`. `cell = None` picks the mean largest side of the boxes
+    /// (module documentation).
+    pub fn build(boxes: &[Aabb<D>], cell: Option<f64>) -> AabbGrid<D> {
+        let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
+        let mut side_sum = 0.0;
+        for (l, h) in boxes {
+            let mut side: f64 = 0.0;
+            for c in 0..D {
                 lo[c] = lo[c].min(l[c]);
                 hi[c] = hi[c].max(h[c]);
+                side = side.max(h[c] - l[c]);
             }
-            len_sum += (Mesh::p2(x, e[0]) - Mesh::p2(x, e[1])).norm();
-            r_sum += r_edge[a];
+            side_sum += side;
         }
-        if ne == 0 {
-            return EdgeGrid {
-                cell: 1.0,
-                origin: [0.0; 2],
-                nx: 1,
-                ny: 1,
-                keys: Vec::new(),
-                edges: Vec::new(),
-            };
-        }
-        let nef = ne as f64;
-        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
-        let mut cell = cell.unwrap_or((len_sum / nef).max(2.0 * r_sum / nef));
-        // Keep the key space in u64 and the grid at most ~4·10⁶ cells a side.
-        cell = cell.max(extent / 4.0e6).max(f64::MIN_POSITIVE);
-        let nx = ((hi[0] - lo[0]) / cell).floor() as u64 + 1;
-        let ny = ((hi[1] - lo[1]) / cell).floor() as u64 + 1;
-        let mut grid = EdgeGrid {
-            cell,
-            origin: lo,
-            nx,
-            ny,
+        let mut grid = AabbGrid {
+            cell: 1.0,
+            origin: [0.0; D],
+            dims: [1; D],
             keys: Vec::new(),
-            edges: Vec::new(),
+            items: Vec::new(),
+            big: Vec::new(),
         };
-        let mut entries: Vec<(u64, u32)> = (0..ne)
+        if boxes.is_empty() || lo.iter().chain(&hi).any(|v| !v.is_finite()) {
+            grid.big = (0..boxes.len() as u32).collect();
+            return grid;
+        }
+        let extent = (0..D)
+            .map(|c| hi[c] - lo[c])
+            .fold(f64::MIN_POSITIVE, f64::max);
+        // At most 2^(62/D) cells a side, so that keys fit in u64.
+        let max_side = 2f64.powf(62.0 / D as f64);
+        grid.cell = cell
+            .unwrap_or(side_sum / boxes.len() as f64)
+            .max(extent / max_side)
+            .max(f64::MIN_POSITIVE);
+        grid.origin = lo;
+        for c in 0..D {
+            grid.dims[c] = ((hi[c] - lo[c]) / grid.cell).floor() as u64 + 1;
+        }
+        let cells: Vec<Option<([u64; D], [u64; D])>> = boxes
+            .par_iter()
+            .map(|(l, h)| {
+                let r = grid.cell_range(l, h);
+                let count = (0..D).fold(1u64, |n, c| n.saturating_mul(r.1[c] - r.0[c] + 1));
+                (count <= MAX_CELLS_PER_BOX).then_some(r)
+            })
+            .collect();
+        grid.big = (0..boxes.len())
+            .filter(|&i| cells[i].is_none())
+            .map(|i| i as u32)
+            .collect();
+        let mut entries: Vec<(u64, u32)> = (0..boxes.len())
             .into_par_iter()
-            .flat_map_iter(|a| {
-                let (l, h) = edge_box(x, mesh.edges[a], r_edge[a]);
-                let (i0, i1, j0, j1) = grid.cell_range(l, h);
-                let ny = grid.ny;
-                (i0..=i1).flat_map(move |i| (j0..=j1).map(move |j| (i * ny + j, a as u32)))
+            .flat_map_iter(|i| {
+                let mut out = Vec::new();
+                if let Some((r0, r1)) = cells[i] {
+                    grid.for_each_run(&r0, &r1, |k0, k1| {
+                        out.extend((k0..=k1).map(|k| (k, i as u32)));
+                    });
+                }
+                out
             })
             .collect();
         entries.par_sort_unstable();
         grid.keys = entries.iter().map(|e| e.0).collect();
-        grid.edges = entries.iter().map(|e| e.1).collect();
+        grid.items = entries.iter().map(|e| e.1).collect();
         grid
     }
 
-    /// Cell index range `(i0, i1, j0, j1)` (inclusive) of the box `[lo, hi]`, clamped to the grid.
-    fn cell_range(&self, lo: [f64; 2], hi: [f64; 2]) -> (u64, u64, u64, u64) {
-        let idx = |v: f64, o: f64, n: u64| -> u64 {
-            let k = ((v - o) / self.cell).floor();
+    /// Inclusive cell index range of the box `[lo, hi]`, clamped to the grid.
+    fn cell_range(&self, lo: &[f64; D], hi: &[f64; D]) -> ([u64; D], [u64; D]) {
+        let idx = |v: f64, c: usize| -> u64 {
+            let k = ((v - self.origin[c]) / self.cell).floor();
             if k.is_nan() || k < 0.0 {
                 0
             } else {
-                (k as u64).min(n - 1)
+                (k as u64).min(self.dims[c] - 1)
             }
         };
         (
-            idx(lo[0], self.origin[0], self.nx),
-            idx(hi[0], self.origin[0], self.nx),
-            idx(lo[1], self.origin[1], self.ny),
-            idx(hi[1], self.origin[1], self.ny),
+            std::array::from_fn(|c| idx(lo[c], c)),
+            std::array::from_fn(|c| idx(hi[c].max(lo[c]), c)),
         )
     }
 
-    /// Appends to `out` every edge registered in a cell that the box `[lo, hi]` overlaps,
-    /// sorted and without repetition.
-    pub fn edges_in_box(&self, lo: [f64; 2], hi: [f64; 2], out: &mut Vec<u32>) {
+    /// Calls `f(k0, k1)` for each run of consecutive keys of the cell range `[r0, r1]`: the
+    /// last coordinate varies fastest, so each choice of the others is one run.
+    fn for_each_run(&self, r0: &[u64; D], r1: &[u64; D], mut f: impl FnMut(u64, u64)) {
+        let mut idx = *r0;
+        loop {
+            let mut k0 = 0u64;
+            for (i, d) in idx.iter().zip(&self.dims[1..]) {
+                k0 = (k0 + i) * d;
+            }
+            let k1 = k0 + r1[D - 1];
+            f(k0 + r0[D - 1], k1);
+            // Odometer over the coordinates 0..D-1.
+            let mut c = D - 1;
+            loop {
+                if c == 0 {
+                    return;
+                }
+                c -= 1;
+                if idx[c] < r1[c] {
+                    idx[c] += 1;
+                    break;
+                }
+                idx[c] = r0[c];
+            }
+        }
+    }
+
+    /// Appends to `out` every item registered in a cell that the box `[lo, hi]` overlaps (and
+    /// every oversized item), sorted and without repetition.
+    pub fn query(&self, lo: &[f64; D], hi: &[f64; D], out: &mut Vec<u32>) {
         let start = out.len();
-        let (i0, i1, j0, j1) = self.cell_range(lo, hi);
-        for i in i0..=i1 {
-            // Cells (i, j0..=j1) have consecutive keys.
-            let k0 = i * self.ny + j0;
-            let k1 = i * self.ny + j1;
-            let p0 = self.keys.partition_point(|&k| k < k0);
-            let p1 = self.keys.partition_point(|&k| k <= k1);
-            out.extend_from_slice(&self.edges[p0..p1]);
+        out.extend_from_slice(&self.big);
+        if !self.keys.is_empty() {
+            let (r0, r1) = self.cell_range(lo, hi);
+            self.for_each_run(&r0, &r1, |k0, k1| {
+                let p0 = self.keys.partition_point(|&k| k < k0);
+                let p1 = self.keys.partition_point(|&k| k <= k1);
+                out.extend_from_slice(&self.items[p0..p1]);
+            });
         }
         out[start..].sort_unstable();
         let mut w = start;
@@ -146,10 +196,21 @@ impl EdgeGrid {
         out.truncate(w);
     }
 
-    /// Number of (cell, edge) entries (memory diagnostics).
+    /// Number of (cell, item) entries (memory diagnostics).
     pub fn entries(&self) -> usize {
         self.keys.len()
     }
+}
+
+/// The grid of the contact edges of `mesh` at `x`, edge `a` inflated by `r_edge[a]`.
+pub fn edge_grid(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> AabbGrid<2> {
+    let boxes: Vec<Aabb<2>> = mesh
+        .edges
+        .par_iter()
+        .enumerate()
+        .map(|(a, &e)| edge_box(x, e, r_edge[a]))
+        .collect();
+    AabbGrid::build(&boxes, None)
 }
 
 /// Every `point_edge` pair `(x, a)`, `x ∉ a`, of contact vertex `x` and contact edge `a` with
@@ -163,13 +224,13 @@ pub fn point_edge_near(
     r_edge: &[f64],
     skip_fixed: bool,
 ) -> Vec<NearPair> {
-    let grid = EdgeGrid::build(mesh, x, r_edge, None);
+    let grid = edge_grid(mesh, x, r_edge);
     point_edge_near_in(&grid, mesh, x, r_vertex, r_edge, skip_fixed)
 }
 
 /// [`point_edge_near`] on a grid already built with the same `r_edge`.
 pub fn point_edge_near_in(
-    grid: &EdgeGrid,
+    grid: &AabbGrid<2>,
     mesh: &Mesh,
     x: &[f64],
     r_vertex: &[f64],
@@ -187,7 +248,7 @@ pub fn point_edge_near_in(
             };
             let p = Mesh::p2(x, v);
             buf.clear();
-            grid.edges_in_box([p.x - rv, p.y - rv], [p.x + rv, p.y + rv], buf);
+            grid.query(&[p.x - rv, p.y - rv], &[p.x + rv, p.y + rv], buf);
             let mut out = Vec::new();
             for &a in buf.iter() {
                 let a = a as usize;
@@ -218,15 +279,14 @@ pub fn point_edge_near_in(
 ///
 /// With `skip_fixed`, pairs of edges whose four vertices are fixed are not tested.
 pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize, usize)> {
-    let zero = vec![0.0; mesh.edges.len()];
-    let grid = EdgeGrid::build(mesh, x, &zero, None);
+    let grid = edge_grid(mesh, x, &vec![0.0; mesh.edges.len()]);
     (0..mesh.edges.len())
         .into_par_iter()
         .map_init(Vec::new, |buf: &mut Vec<u32>, a| {
             let ea = mesh.edges[a];
             let (lo, hi) = edge_box(x, ea, 0.0);
             buf.clear();
-            grid.edges_in_box(lo, hi, buf);
+            grid.query(&lo, &hi, buf);
             for &b in buf.iter() {
                 let b = b as usize;
                 if b <= a {
@@ -429,6 +489,44 @@ mod tests {
             }
         }
         assert!(crossings > 10, "too few crossing cases: {crossings}");
+    }
+
+    #[test]
+    fn aabb_grid_3d_query_matches_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let boxes: Vec<Aabb<3>> = (0..400)
+            .map(|i| {
+                let c: [f64; 3] = std::array::from_fn(|_| rng.gen_range(0.0..1.0));
+                // A few oversized boxes exercise the `big` list.
+                let r = if i % 97 == 0 {
+                    0.9
+                } else {
+                    rng.gen_range(0.0..0.05)
+                };
+                (c.map(|v| v - r), c.map(|v| v + r))
+            })
+            .collect();
+        let grid = AabbGrid::build(&boxes, Some(0.01));
+        assert!(!grid.big.is_empty(), "no oversized box in the test");
+        let overlap =
+            |a: &Aabb<3>, b: &Aabb<3>| (0..3).all(|c| a.0[c] <= b.1[c] && b.0[c] <= a.1[c]);
+        let mut found = 0;
+        for _ in 0..200 {
+            let c: [f64; 3] = std::array::from_fn(|_| rng.gen_range(-0.1..1.1));
+            let r = rng.gen_range(0.0..0.1);
+            let q = (c.map(|v| v - r), c.map(|v| v + r));
+            let mut got = Vec::new();
+            grid.query(&q.0, &q.1, &mut got);
+            // Every overlapping box is returned (the grid may return more: same cells).
+            for (i, b) in boxes.iter().enumerate() {
+                if overlap(b, &q) {
+                    assert!(got.binary_search(&(i as u32)).is_ok(), "box {i} missed");
+                    found += 1;
+                }
+            }
+            assert!(got.windows(2).all(|w| w[0] < w[1]), "not sorted/unique");
+        }
+        assert!(found > 200, "too few overlaps tested: {found}");
     }
 
     #[test]
