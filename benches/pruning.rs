@@ -8,6 +8,12 @@
 //!   pairs with both ends fixed skipped;
 //! - `broad_phase/min_distance`: the exact admissibility check of every iterate,
 //!   `min_distance_near(mesh, x0, 2ε, true)`;
+//! - `broad_phase/structure`: the uniform grid (`grid`, [`AabbGrid`]) against the bounding volume
+//!   hierarchy (`bvh`, [`Bvh`]) on the query pattern of the first bench: the contact edge boxes
+//!   inflated by the same radius, the structure built over them, then one query per contact
+//!   vertex with its point box (in parallel, as `point_edge_near`); the candidates are only
+//!   counted (no narrow phase), so the grid's superset and the BVH's exact answer cost their
+//!   own query time only. The contact vertex list is computed once, outside the timed loop;
 //! - `assembly/pruned_qp`: the rows of the pairs found by the first bench
 //!   (`point_edge_rows`) then `build_qp` (gradient, projected Hessian, QP matrices); the pairs
 //!   are found once, outside the timed loop.
@@ -23,7 +29,9 @@
 
 use std::time::Duration;
 
-use contactlab::broad_phase::{min_distance_near, point_edge_near};
+use contactlab::broad_phase::{min_distance_near, point_edge_near, Aabb, AabbGrid};
+use contactlab::bvh::Bvh;
+use contactlab::mesh::Mesh;
 use contactlab::outer::median_edge_length;
 use contactlab::pairs::PointEdgePair;
 use contactlab::rows::point_edge_rows;
@@ -33,6 +41,7 @@ use contactlab::subproblem::{build_qp, DofMap, InnerSettings};
 use criterion::{
     black_box, criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };
+use rayon::prelude::*;
 
 /// Elements per membrane.
 const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
@@ -73,6 +82,39 @@ impl Fixture {
     }
 }
 
+/// The box of each contact edge inflated by `r_edge` (as `broad_phase::edge_grid` builds them).
+fn edge_boxes(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> Vec<Aabb<2>> {
+    mesh.edges
+        .par_iter()
+        .zip(r_edge)
+        .map(|(&[i, j], &r)| {
+            let (a, b) = (Mesh::p2(x, i), Mesh::p2(x, j));
+            (
+                [a.x.min(b.x) - r, a.y.min(b.y) - r],
+                [a.x.max(b.x) + r, a.y.max(b.y) + r],
+            )
+        })
+        .collect()
+}
+
+/// Total number of candidates over one point-box query per vertex of `verts` (in parallel,
+/// one buffer per rayon task, as `point_edge_near_in`).
+fn count_candidates(
+    verts: &[usize],
+    x: &[f64],
+    query: impl Fn(&[f64; 2], &[f64; 2], &mut Vec<u32>) + Sync,
+) -> usize {
+    verts
+        .par_iter()
+        .map_init(Vec::new, |buf: &mut Vec<u32>, &v| {
+            let p = [x[2 * v], x[2 * v + 1]];
+            buf.clear();
+            query(&p, &p, buf);
+            buf.len()
+        })
+        .sum()
+}
+
 fn configure(group: &mut BenchmarkGroup<'_, criterion::measurement::WallTime>) {
     group
         .sample_size(10)
@@ -101,6 +143,33 @@ fn benches(c: &mut Criterion) {
         group.throughput(Throughput::Elements(mesh.nv() as u64));
         group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
             b.iter(|| min_distance_near(mesh, black_box(x), 2.0 * f.scene.eps, true))
+        });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("broad_phase/structure");
+    configure(&mut group);
+    for f in &fixtures {
+        let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
+        let verts = mesh.contact_vertices();
+        group.throughput(Throughput::Elements(mesh.nv() as u64));
+        group.bench_function(BenchmarkId::new("grid", f.n), |b| {
+            b.iter(|| {
+                let x = black_box(x);
+                let grid = AabbGrid::build(&edge_boxes(mesh, x, &f.r_edge), None);
+                black_box(count_candidates(&verts, x, |lo, hi, out| {
+                    grid.query(lo, hi, out)
+                }))
+            })
+        });
+        group.bench_function(BenchmarkId::new("bvh", f.n), |b| {
+            b.iter(|| {
+                let x = black_box(x);
+                let bvh = Bvh::build(&edge_boxes(mesh, x, &f.r_edge));
+                black_box(count_candidates(&verts, x, |lo, hi, out| {
+                    bvh.query(lo, hi, out)
+                }))
+            })
         });
     }
     group.finish();

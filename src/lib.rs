@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod broad_phase;
+pub mod bvh;
 pub mod diagnostics;
 pub mod energy;
 pub mod geometry;
