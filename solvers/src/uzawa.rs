@@ -9,6 +9,14 @@
 //! `P` of contactlab). A failed factorization (`P` not positive definite) returns status
 //! `NumericalError`.
 //!
+//! The symbolic phase ([`LdlSymbolic`]: elimination tree and column counts, which depend on the
+//! pattern of `P` only) is kept by the backend together with the pattern it was computed for,
+//! and reused by the next solve whose `P` has exactly that pattern (same `n`, column pointers
+//! and row indices; explicit zeros count as entries): only the numeric phase then runs, and its
+//! result is bit-identical to a fresh factorization. Any other pattern recomputes the symbolic
+//! phase ([`UzawaBackend::symbolic_phases`] counts them). There is no setting to turn this off:
+//! it changes no result, only time.
+//!
 //! Every QP row is turned into one-sided "contact" rows `c_kᵀ x ≥ d_k`: a finite lower bound
 //! gives `c_k = a_i, d_k = l_i`; a finite upper bound gives `c_k = −a_i, d_k = −u_i` (so a
 //! two-sided row with `l_i < u_i` becomes two rows); an equality row (`l_i = u_i`) gives one row
@@ -57,38 +65,54 @@ use std::time::Instant;
 #[derive(Clone, Debug)]
 pub struct UzawaBackend {
     settings: QpSettings,
+    /// Symbolic phase of the last `P` factorized (it carries its pattern).
+    symbolic: Option<LdlSymbolic>,
+    /// Number of symbolic phases computed so far.
+    symbolic_phases: usize,
 }
 
 impl UzawaBackend {
     /// A backend using `settings` (validated at each solve).
     pub fn new(settings: QpSettings) -> Self {
-        UzawaBackend { settings }
+        UzawaBackend {
+            settings,
+            symbolic: None,
+            symbolic_phases: 0,
+        }
+    }
+
+    /// Number of symbolic phases (elimination tree and column counts of `P`) this backend has
+    /// computed: one per solve whose `P` pattern differs from the previous one's, so a sequence
+    /// of QPs sharing one pattern counts 1.
+    pub fn symbolic_phases(&self) -> usize {
+        self.symbolic_phases
     }
 }
 
 const NONE: usize = usize::MAX;
 
-/// Sparse `LDLᵀ` factorization of a symmetric matrix given by its upper triangle (QDLDL
-/// algorithm, natural ordering). Used as a Cholesky: it fails unless every pivot is positive.
-#[derive(Clone, Debug)]
-pub struct SparseLdl {
+/// Symbolic phase of [`SparseLdl`] for one sparsity pattern: the elimination tree and the column
+/// pointers of `L` (from the column counts), together with the pattern (`ncols`, `colptr`,
+/// `rowval` of the upper triangle) it was computed for. It depends on the pattern only, never on
+/// the values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LdlSymbolic {
     n: usize,
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    etree: Vec<usize>,
     lp: Vec<usize>,
-    li: Vec<usize>,
-    lx: Vec<f64>,
-    dinv: Vec<f64>,
 }
 
-impl SparseLdl {
-    /// Factorizes the matrix whose upper triangle is `a` (square, CSC, sorted rows). Returns
-    /// `None` when `a` is not square, has an entry below the diagonal, or a pivot is not
-    /// positive (relative to the largest diagonal entry) or not finite.
-    pub fn factor(a: &CscMatrix) -> Option<SparseLdl> {
+impl LdlSymbolic {
+    /// Elimination tree and column counts of the symmetric matrix whose upper triangle is `a`
+    /// (square, CSC, sorted rows). Returns `None` when `a` is not square or has an entry below
+    /// the diagonal.
+    pub fn new(a: &CscMatrix) -> Option<LdlSymbolic> {
         let n = a.ncols;
         if a.nrows != n {
             return None;
         }
-        // Elimination tree and column counts.
         let mut work = vec![NONE; n];
         let mut lnz = vec![0usize; n];
         let mut etree = vec![NONE; n];
@@ -116,6 +140,63 @@ impl SparseLdl {
         for i in 0..n {
             lp[i + 1] = lp[i] + lnz[i];
         }
+        Some(LdlSymbolic {
+            n,
+            colptr: a.colptr[..=n].to_vec(),
+            rowval: a.rowval[..a.colptr[n]].to_vec(),
+            etree,
+            lp,
+        })
+    }
+
+    /// Whether `a` has exactly the pattern this symbolic phase was computed for (same shape,
+    /// column pointers and row indices; the values are free).
+    pub fn matches(&self, a: &CscMatrix) -> bool {
+        a.nrows == self.n
+            && a.ncols == self.n
+            && a.colptr.len() == self.n + 1
+            && a.colptr == self.colptr
+            && a.rowval.get(..self.colptr[self.n]) == Some(&self.rowval[..])
+    }
+
+    /// Number of entries of `L` below the diagonal.
+    pub fn nnz_l(&self) -> usize {
+        self.lp[self.n]
+    }
+}
+
+/// Sparse `LDLᵀ` factorization of a symmetric matrix given by its upper triangle (QDLDL
+/// algorithm, natural ordering). Used as a Cholesky: it fails unless every pivot is positive.
+#[derive(Clone, Debug)]
+pub struct SparseLdl {
+    n: usize,
+    lp: Vec<usize>,
+    li: Vec<usize>,
+    lx: Vec<f64>,
+    dinv: Vec<f64>,
+}
+
+impl SparseLdl {
+    /// Factorizes the matrix whose upper triangle is `a` (square, CSC, sorted rows). Returns
+    /// `None` when `a` is not square, has an entry below the diagonal, or a pivot is not
+    /// positive (relative to the largest diagonal entry) or not finite. Same as
+    /// [`LdlSymbolic::new`] followed by [`SparseLdl::numeric`].
+    pub fn factor(a: &CscMatrix) -> Option<SparseLdl> {
+        SparseLdl::numeric(a, &LdlSymbolic::new(a)?)
+    }
+
+    /// Numeric phase: factorizes `a` with the symbolic phase `sym` of its pattern, skipping the
+    /// elimination tree and column counts. The result is bit-identical to [`SparseLdl::factor`]
+    /// of `a`. Returns `None` when `a` does not have the pattern of `sym`
+    /// ([`LdlSymbolic::matches`]) or a pivot is not positive (relative to the largest diagonal
+    /// entry) or not finite.
+    pub fn numeric(a: &CscMatrix, sym: &LdlSymbolic) -> Option<SparseLdl> {
+        if !sym.matches(a) {
+            return None;
+        }
+        let n = sym.n;
+        let etree = &sym.etree;
+        let lp = sym.lp.clone();
         let nnz = lp[n];
         let mut li = vec![0usize; nnz];
         let mut lx = vec![0.0; nnz];
@@ -323,7 +404,16 @@ impl QpBackend for UzawaBackend {
             iterations,
             solve_time_s: start.elapsed().as_secs_f64(),
         };
-        let Some(ldl) = SparseLdl::factor(&qp.p) else {
+        // Symbolic phase only when the pattern of P changed since the last solve.
+        if !self.symbolic.as_ref().is_some_and(|sym| sym.matches(&qp.p)) {
+            self.symbolic = LdlSymbolic::new(&qp.p);
+            self.symbolic_phases += 1;
+        }
+        let Some(ldl) = self
+            .symbolic
+            .as_ref()
+            .and_then(|sym| SparseLdl::numeric(&qp.p, sym))
+        else {
             return Ok(finish(
                 vec![0.0; n],
                 vec![0.0; m],
