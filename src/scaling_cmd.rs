@@ -53,6 +53,12 @@ pub struct ScalingArgs {
     /// Wall-clock limit per case, seconds (the case is killed and recorded as `timeout`).
     #[arg(long, default_value_t = 1800.0)]
     case_timeout_s: f64,
+    /// Initial trust-region half-width relative to the median edge length (trust-region rows).
+    #[arg(long, default_value_t = 1.0)]
+    trust_delta0: f64,
+    /// Inner steps per T(ψ) at most.
+    #[arg(long, default_value_t = 50)]
+    max_inner: usize,
 }
 
 /// Arguments of the hidden `contactlab scaling-case`.
@@ -66,13 +72,19 @@ pub struct CaseArgs {
     backend: String,
     #[arg(long)]
     max_outer: usize,
+    #[arg(long)]
+    trust_delta0: f64,
+    #[arg(long)]
+    max_inner: usize,
 }
 
-const COLS: [&str; 17] = [
+const COLS: [&str; 19] = [
     "n",
     "vertices",
     "pruning",
     "kind",
+    "trust_delta0",
+    "max_inner",
     "status",
     "outer_iterations",
     "inner_iterations",
@@ -109,11 +121,13 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         ..Default::default()
     })?;
     let mut backend = backend_from_name(&a.backend, &default_settings(&a.backend))?;
-    let settings = OuterSettings {
+    let mut settings = OuterSettings {
         max_outer: a.max_outer,
         pruning,
         ..Default::default()
     };
+    settings.trust.delta0 = a.trust_delta0;
+    settings.inner.max_inner = a.max_inner;
     let mut first = None;
     let res = run(
         &scene.mesh,
@@ -139,6 +153,8 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         "vertices": scene.mesh.nv(),
         "pruning": pruning.as_str(),
         "kind": if a.max_outer == 1 { "one_step" } else { "full" },
+        "trust_delta0": a.trust_delta0,
+        "max_inner": a.max_inner,
         "status": status,
         "outer_iterations": res.outer_iterations,
         "inner_iterations": if a.max_outer == 1 { f.inner_iterations } else { res.inner_iterations },
@@ -167,13 +183,16 @@ fn read_rows(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
     let mut rows = Vec::new();
     for (i, rec) in rd.records().enumerate() {
         let rec = rec.with_context(|| format!("{}: bad row {}", path.display(), i + 2))?;
-        rows.push(
-            headers
-                .iter()
-                .zip(rec.iter())
-                .map(|(h, v)| (h.to_string(), v.to_string()))
-                .collect(),
-        );
+        let mut row: BTreeMap<String, String> = headers
+            .iter()
+            .zip(rec.iter())
+            .map(|(h, v)| (h.to_string(), v.to_string()))
+            .collect();
+        // Rows written before these columns existed ran with the defaults.
+        row.entry("trust_delta0".into())
+            .or_insert_with(|| "1".into());
+        row.entry("max_inner".into()).or_insert_with(|| "50".into());
+        rows.push(row);
     }
     Ok(rows)
 }
@@ -188,22 +207,28 @@ fn write_rows(path: &Path, rows: &[BTreeMap<String, String>]) -> Result<()> {
     Ok(())
 }
 
-fn key(r: &BTreeMap<String, String>) -> (usize, String, String) {
+/// A row's key: `(n, pruning, kind, trust_delta0, max_inner)` (the last two as written).
+type Key = (usize, String, String, String, String);
+
+fn key(r: &BTreeMap<String, String>) -> Key {
+    let f = |k: &str| r.get(k).cloned().unwrap_or_default();
     (
         r.get("n").and_then(|v| v.parse().ok()).unwrap_or(0),
-        r.get("pruning").cloned().unwrap_or_default(),
-        r.get("kind").cloned().unwrap_or_default(),
+        f("pruning"),
+        f("kind"),
+        f("trust_delta0"),
+        f("max_inner"),
     )
 }
 
 /// Runs one case in a child process with a time limit.
 fn run_case(
+    a: &ScalingArgs,
     n: usize,
     mode: &str,
-    backend: &str,
     max_outer: usize,
-    timeout: f64,
 ) -> Result<BTreeMap<String, String>> {
+    let (backend, timeout) = (a.backend.as_str(), a.case_timeout_s);
     let exe = std::env::current_exe()?;
     let mut child = Command::new(exe)
         .args([
@@ -216,6 +241,10 @@ fn run_case(
             backend,
             "--max-outer",
             &max_outer.to_string(),
+            "--trust-delta0",
+            &a.trust_delta0.to_string(),
+            "--max-inner",
+            &a.max_inner.to_string(),
         ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -229,6 +258,8 @@ fn run_case(
                 "kind",
                 if max_outer == 1 { "one_step" } else { "full" }.to_string(),
             ),
+            ("trust_delta0", a.trust_delta0.to_string()),
+            ("max_inner", a.max_inner.to_string()),
             ("status", status),
             (
                 "wall_time_s",
@@ -286,6 +317,15 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
     if a.case_timeout_s.is_nan() || a.case_timeout_s <= 0.0 {
         bail!("--case-timeout-s must be > 0, got {}", a.case_timeout_s);
     }
+    if !(a.trust_delta0 > 0.0 && a.trust_delta0.is_finite()) {
+        bail!(
+            "--trust-delta0 must be finite and > 0, got {}",
+            a.trust_delta0
+        );
+    }
+    if a.max_inner == 0 {
+        bail!("--max-inner must be >= 1, got 0");
+    }
     backend_from_name(&a.backend, &default_settings(&a.backend))?;
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -306,16 +346,20 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
     let total = cases.len();
     for (i, (n, m, max_outer)) in cases.into_iter().enumerate() {
         let kind = if max_outer == 1 { "one_step" } else { "full" };
-        if rows
-            .iter()
-            .any(|r| key(r) == (n, m.clone(), kind.to_string()))
-        {
+        let k: Key = (
+            n,
+            m.clone(),
+            kind.to_string(),
+            a.trust_delta0.to_string(),
+            a.max_inner.to_string(),
+        );
+        if rows.iter().any(|r| key(r) == k) {
             eprintln!("[{}/{total}] n={n} {m} {kind}: in the CSV, skipped", i + 1);
             continue;
         }
         eprint!("[{}/{total}] n={n} {m} {kind} ... ", i + 1);
         let _ = std::io::stderr().flush();
-        let row = run_case(n, &m, &a.backend, max_outer, a.case_timeout_s)?;
+        let row = run_case(&a, n, &m, max_outer)?;
         eprintln!(
             "{} (step {} s, wall {} s, peak {} MiB)",
             row.get("status").map_or("", |s| s.as_str()),
@@ -329,14 +373,32 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
     }
     // The picture and the fitted exponents, from every finished one-step row in the CSV.
     let mut series = Vec::new();
-    for m in ["lazy", "trust-region", "all-pairs"] {
-        let pts: Vec<(f64, f64)> = rows
+    // One series per setting: pruning mode, δ0 (trust region only) and max_inner.
+    let done: Vec<&BTreeMap<String, String>> = rows
+        .iter()
+        .filter(|r| {
+            r.get("kind").map(|s| s.as_str()) == Some("one_step")
+                && r.get("status").map(|s| s.as_str()) == Some("one_step_done")
+        })
+        .collect();
+    let label_of = |r: &BTreeMap<String, String>| {
+        let f = |k: &str| r.get(k).cloned().unwrap_or_default();
+        let mut l = f("pruning");
+        if l == "trust-region" {
+            l += &format!(" δ0={}h", f("trust_delta0"));
+        }
+        if f("max_inner") != "50" {
+            l += &format!(" inner≤{}", f("max_inner"));
+        }
+        l
+    };
+    let mut labels: Vec<String> = done.iter().map(|r| label_of(r)).collect();
+    labels.sort();
+    labels.dedup();
+    for m in labels {
+        let pts: Vec<(f64, f64)> = done
             .iter()
-            .filter(|r| {
-                r.get("pruning").map(|s| s.as_str()) == Some(m)
-                    && r.get("kind").map(|s| s.as_str()) == Some("one_step")
-                    && r.get("status").map(|s| s.as_str()) == Some("one_step_done")
-            })
+            .filter(|r| label_of(r) == m)
             .filter_map(|r| {
                 Some((
                     r.get("vertices")?.parse().ok()?,
@@ -344,13 +406,10 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
                 ))
             })
             .collect();
-        if pts.is_empty() {
-            continue;
-        }
         let slope = loglog_slope(&pts);
         let label = match slope {
             Some(s) => format!("{m} (slope {s:.2})"),
-            None => m.to_string(),
+            None => m.clone(),
         };
         println!(
             "{m}: time per outer iteration ~ N^{} over {} sizes",
