@@ -82,7 +82,7 @@ impl Fixture {
     }
 }
 
-/// The box of each contact edge inflated by `r_edge` (as `broad_phase::edge_grid` builds them).
+/// The box of each contact edge inflated by `r_edge` (as `broad_phase::edge_index` builds them).
 fn edge_boxes(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> Vec<Aabb<2>> {
     mesh.edges
         .par_iter()

@@ -1,21 +1,28 @@
-//! Broad phase: a uniform grid over axis-aligned boxes ([`AabbGrid`], any dimension), built by
-//! sorting cell keys; in 2D it finds the `point_edge` pairs and the edge crossings.
+//! Broad phase: in 2D it finds the `point_edge` pairs and the edge crossings through an index
+//! over the axis-aligned boxes of the contact edges. Two structures with one contract (register
+//! boxes by index; a query returns the overlapping items sorted, without repetition) exist in any
+//! dimension: a uniform grid built by sorting cell keys ([`AabbGrid`]) and a bounding volume
+//! hierarchy ([`crate::bvh::Bvh`]). The pair search uses the BVH ([`edge_index`]): on the
+//! balloons scene the bench `broad_phase/structure` (build plus one query per vertex) measured
+//! them equal at 10³ and 10⁴ elements per membrane and the BVH 1.4× faster at 10⁵ (README,
+//! "Broad phase"). The grid stays for comparison and for scenes where it may win.
 //!
-//! Every contact edge `a` is registered in each grid cell that its axis-aligned bounding box,
-//! inflated by a per-edge radius `r_a`, overlaps; a vertex `x` with radius `r_x` looks up the
-//! cells its box `[ψ(x) − r_x, ψ(x) + r_x]` overlaps. Two boxes that do not overlap cannot hold a
-//! pair with `dist(ψ(x), ψ(a)) ≤ r_x + r_a` (the Euclidean distance bounds the L∞ distance), so
-//! the narrow phase ([`point_edge_distance`], exact) sees every such pair.
+//! Every contact edge `a` is registered with its axis-aligned bounding box inflated by a
+//! per-edge radius `r_a`; a vertex `x` with radius `r_x` queries the box
+//! `[ψ(x) − r_x, ψ(x) + r_x]`. Two boxes that do not overlap cannot hold a pair with
+//! `dist(ψ(x), ψ(a)) ≤ r_x + r_a` (the Euclidean distance bounds the L∞ distance), so the narrow
+//! phase ([`point_edge_distance`], exact) sees every such pair.
 //!
 //! The grid is a sorted vector of `(cell key, item)` entries (no hash map): building it is a
-//! parallel sort, a lookup a binary search per run of cells, and the output order (vertex, then
-//! edge index) does not depend on the number of rayon threads. The cell size defaults to the
-//! mean largest side of the registered boxes, so a box spans O(1) cells and a cell holds O(1)
-//! boxes on the quasi-uniform meshes of the scenes.
+//! parallel sort, a lookup a binary search per run of cells. The cell size defaults to the mean
+//! largest side of the registered boxes, so a box spans O(1) cells and a cell holds O(1) boxes
+//! on the quasi-uniform meshes of the scenes. With either structure the output order (vertex,
+//! then edge index) does not depend on the number of rayon threads.
 //!
 //! The same names run through the layers: `point_edge` pairs here, in [`crate::pairs`], in the
 //! rows of T(ψ) ([`crate::rows`]) and in the diagnostics.
 
+use crate::bvh::Bvh;
 use crate::geometry::{edge_edge_distance_2d, point_edge_distance};
 use crate::mesh::Mesh;
 use crate::pairs::{ClosestPair, MinDistance, PointEdgePair};
@@ -202,15 +209,17 @@ impl<const D: usize> AabbGrid<D> {
     }
 }
 
-/// The grid of the contact edges of `mesh` at `x`, edge `a` inflated by `r_edge[a]`.
-pub fn edge_grid(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> AabbGrid<2> {
+/// The index of the contact edges of `mesh` at `x`, edge `a` inflated by `r_edge[a]`: a
+/// [`Bvh`], chosen over [`AabbGrid`] by the `broad_phase/structure` bench (README, "Broad
+/// phase").
+pub fn edge_index(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> Bvh<2> {
     let boxes: Vec<Aabb<2>> = mesh
         .edges
         .par_iter()
         .enumerate()
         .map(|(a, &e)| edge_box(x, e, r_edge[a]))
         .collect();
-    AabbGrid::build(&boxes, None)
+    Bvh::build(&boxes)
 }
 
 /// Every `point_edge` pair `(x, a)`, `x ∉ a`, of contact vertex `x` and contact edge `a` with
@@ -224,13 +233,13 @@ pub fn point_edge_near(
     r_edge: &[f64],
     skip_fixed: bool,
 ) -> Vec<NearPair> {
-    let grid = edge_grid(mesh, x, r_edge);
-    point_edge_near_in(&grid, mesh, x, r_vertex, r_edge, skip_fixed)
+    let index = edge_index(mesh, x, r_edge);
+    point_edge_near_in(&index, mesh, x, r_vertex, r_edge, skip_fixed)
 }
 
-/// [`point_edge_near`] on a grid already built with the same `r_edge`.
+/// [`point_edge_near`] on an edge index already built with the same `r_edge`.
 pub fn point_edge_near_in(
-    grid: &AabbGrid<2>,
+    index: &Bvh<2>,
     mesh: &Mesh,
     x: &[f64],
     r_vertex: &[f64],
@@ -248,7 +257,7 @@ pub fn point_edge_near_in(
             };
             let p = Mesh::p2(x, v);
             buf.clear();
-            grid.query(&[p.x - rv, p.y - rv], &[p.x + rv, p.y + rv], buf);
+            index.query(&[p.x - rv, p.y - rv], &[p.x + rv, p.y + rv], buf);
             let mut out = Vec::new();
             for &a in buf.iter() {
                 let a = a as usize;
@@ -279,14 +288,14 @@ pub fn point_edge_near_in(
 ///
 /// With `skip_fixed`, pairs of edges whose four vertices are fixed are not tested.
 pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize, usize)> {
-    let grid = edge_grid(mesh, x, &vec![0.0; mesh.edges.len()]);
+    let index = edge_index(mesh, x, &vec![0.0; mesh.edges.len()]);
     (0..mesh.edges.len())
         .into_par_iter()
         .map_init(Vec::new, |buf: &mut Vec<u32>, a| {
             let ea = mesh.edges[a];
             let (lo, hi) = edge_box(x, ea, 0.0);
             buf.clear();
-            grid.query(&lo, &hi, buf);
+            index.query(&lo, &hi, buf);
             for &b in buf.iter() {
                 let b = b as usize;
                 if b <= a {

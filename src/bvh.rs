@@ -17,9 +17,9 @@
 //!
 //! A query is an iterative depth-first traversal with a fixed stack of node indices.
 //!
-//! This module exists to be compared with the grid of [`crate::broad_phase`] (benches
-//! `broad_phase/structure` in `benches/pruning.rs`); which one the pair search uses is chosen
-//! by measurement.
+//! The pair search of [`crate::broad_phase`] uses this tree: the bench `broad_phase/structure`
+//! in `benches/pruning.rs` measured it as fast as the grid at 10³ and 10⁴ elements per membrane
+//! and 1.4× faster at 10⁵.
 
 use crate::broad_phase::Aabb;
 

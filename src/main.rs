@@ -1,6 +1,6 @@
 //! The `contactlab` command line.
 //!
-//! `contactlab run [balloons] [--backend clarabel|osqp|uzawa] [--n 40] [--out DIR] …` runs the
+//! `contactlab run [balloons] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
 //! outer loop on a scene and writes a run directory (see README).
 
 use anyhow::{bail, Context, Result};
@@ -46,7 +46,7 @@ struct RunArgs {
     /// Scene name (only `balloons` so far).
     #[arg(default_value = "balloons")]
     scene: String,
-    /// Sub-problem backend: clarabel, osqp or uzawa.
+    /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
     #[arg(long, default_value = "clarabel")]
     backend: String,
     /// Elements per membrane.

@@ -4,7 +4,8 @@ use crate::qp::Qp;
 use thiserror::Error;
 
 /// Names accepted by [`backend_from_name`].
-pub const BACKEND_NAMES: [&str; 3] = ["clarabel", "osqp", "uzawa"];
+/// `clarabel-reuse` is Clarabel keeping its solver between QPs of one structure (data updates).
+pub const BACKEND_NAMES: [&str; 4] = ["clarabel", "clarabel-reuse", "osqp", "uzawa"];
 
 /// Invalid input to a backend. Non-convergence is NOT an error: it is a [`QpStatus`].
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -219,6 +220,9 @@ pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn Qp
         "clarabel" => Ok(Box::new(crate::clarabel_backend::ClarabelBackend::new(
             settings.clone(),
         ))),
+        "clarabel-reuse" => Ok(Box::new(
+            crate::clarabel_backend::ClarabelBackend::with_reuse(settings.clone()),
+        )),
         "osqp" => Ok(Box::new(crate::osqp_backend::OsqpBackend::new(
             settings.clone(),
         ))),

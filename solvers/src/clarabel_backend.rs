@@ -9,6 +9,8 @@
 //! * a finite lower bound: one `NonnegativeCone` row `−a_i x + s = −l_i`;
 //! * infinite bounds are dropped (a free row gets `y_i = 0`).
 //!
+//! The equality rows come first (in QP row order), then the inequality rows (in QP row order, the
+//! upper bound before the lower bound of a row); explicit zeros of `A` stay entries of `A_c`.
 //! Clarabel's duals `z` satisfy `P x + q + A_cᵀ z = 0` with `z ≥ 0` on the nonnegative cone, so
 //! the crate dual is `y_i = z_upper − z_lower` (equality rows: `y_i = z_eq`), which gives
 //! `P x + q + Aᵀ y = 0`, `y_i ≤ 0` at an active lower bound and `y_i ≥ 0` at an active upper
@@ -18,6 +20,36 @@
 //!
 //! `tol_gap_abs = tol_feas = eps_abs`, `tol_gap_rel = eps_rel` (floored at `1e-16` since Clarabel
 //! needs a positive value), `max_iter`, `time_limit` (seconds, `∞` kept), `verbose = false`.
+//!
+//! # Reuse of the solver
+//!
+//! The backend keeps the `DefaultSolver` of its last solve. The next solve reuses it when the
+//! conic form has the same structure: the same `n` and settings, the same pattern of `P` (upper
+//! triangle; column pointers and row indices, explicit zeros count as entries), the same pattern
+//! of `A_c` and the same cones (numbers of `ZeroCone` and `NonnegativeCone` rows). `A_c` and the
+//! cones depend on the pattern of `A` and on which rows are equalities or have a finite lower or
+//! upper bound, so a row becoming an equality, or gaining or losing a finite bound, changes the
+//! structure, while one-sided rows trading an upper for a lower bound, or free rows (no conic
+//! row, so `m` itself does not count), do not. The solve then skips `DefaultSolver::new`
+//! (presolve, equilibration, KKT assembly, ordering, symbolic factorization, allocations) and
+//! overwrites the values with `update_P`, `update_A`, `update_q` and `update_b`. The
+//! interior-point iterations restart from Clarabel's default initial point, computed from the new
+//! data, so nothing of the previous solution is used. One thing differs from a fresh set-up:
+//! Clarabel's updates apply the Ruiz equilibration (`D`, `E`, cost scale `c`) computed at set-up
+//! from the first QP's values instead of recomputing it, so the reused solver solves the same QP
+//! under another scaling. The results meet the same tolerances (residuals, duality gap) as a
+//! fresh solve but are not bit for bit equal: on a well-conditioned QP `x` and `y` agree to about
+//! the tolerance, on an ill-conditioned one they may differ much more (the objectives still
+//! agree); iteration counts may differ, and values drifting far in magnitude from the set-up
+//! ones may need more iterations than a fresh solve. Clarabel refuses updates after its presolve
+//! removed rows (a right-hand side above Clarabel's infinity `clarabel::get_infinity()`, `1e20`
+//! by default, i.e. a finite `u_i ≥ 1e20` or `l_i ≤ −1e20`): such a solver is not kept
+//! (`is_data_update_allowed()`), and a QP with such a bound always gets a new solver, as a fresh
+//! backend would presolve it. Chordal decomposition (PSD cones only) and the dropping of
+//! structural zeros (off) never prevent reuse here. Any other change of structure sets up a new
+//! solver ([`ClarabelBackend::setups`] counts set-ups). Reuse is opt-in: [`ClarabelBackend::new`]
+//! (backend name `clarabel`, the default) sets up a new solver for every QP;
+//! [`ClarabelBackend::with_reuse`] (backend name `clarabel-reuse`) keeps it.
 //!
 //! # Status mapping
 //!
@@ -38,16 +70,101 @@ use clarabel::solver::{
 };
 use std::time::Instant;
 
-/// The Clarabel interior-point backend. See the module documentation for the mapping.
-#[derive(Clone, Debug)]
+/// The Clarabel interior-point backend. See the module documentation for the mapping and the
+/// reuse of the solver.
 pub struct ClarabelBackend {
     settings: QpSettings,
+    /// The solver built by an earlier solve, kept while the structure does not change.
+    cache: Option<Cached>,
+    /// Number of `DefaultSolver::new` calls so far.
+    setups: usize,
+    /// Whether the solver is kept for the next solve (`with_reuse`); off by default.
+    reuse: bool,
+}
+
+/// A set-up Clarabel solver with the structure it was set up for.
+struct Cached {
+    solver: DefaultSolver<f64>,
+    /// The settings it was set up with.
+    settings: QpSettings,
+    /// Number of variables.
+    n: usize,
+    /// Pattern of `P` (upper triangle): column pointers and row indices.
+    p_colptr: Vec<usize>,
+    p_rowval: Vec<usize>,
+    /// Pattern of the conic `A_c`: column pointers and row indices.
+    a_colptr: Vec<usize>,
+    a_rowval: Vec<usize>,
+    /// Number of `ZeroCone` rows and of conic rows.
+    n_eq: usize,
+    mc: usize,
+}
+
+impl Cached {
+    /// Whether `qp`, converted to `conic` and solved with `settings`, has the structure this
+    /// solver was set up for.
+    fn fits(&self, qp: &Qp, conic: &Conic, settings: &QpSettings) -> bool {
+        self.settings == *settings
+            && self.n == qp.n()
+            && self.n_eq == conic.n_eq
+            && self.mc == conic.b.len()
+            && qp.p.colptr == self.p_colptr
+            && qp.p.rowval == self.p_rowval
+            && conic.a.colptr == self.a_colptr
+            && conic.a.rowval == self.a_rowval
+    }
 }
 
 impl ClarabelBackend {
-    /// A backend using `settings` (validated at each solve).
+    /// A backend using `settings` (validated at each solve) that sets up a new solver for every
+    /// QP, as a fresh backend would: results do not depend on earlier solves.
     pub fn new(settings: QpSettings) -> Self {
-        ClarabelBackend { settings }
+        ClarabelBackend {
+            settings,
+            cache: None,
+            setups: 0,
+            reuse: false,
+        }
+    }
+
+    /// A backend that keeps its solver between solves of QPs of one structure and only updates
+    /// the values (see the module documentation, "Reuse of the solver"). Selected by the backend
+    /// name `clarabel-reuse`.
+    pub fn with_reuse(settings: QpSettings) -> Self {
+        ClarabelBackend {
+            reuse: true,
+            ..ClarabelBackend::new(settings)
+        }
+    }
+
+    /// Number of Clarabel set-ups (`DefaultSolver::new`: presolve, equilibration, KKT assembly,
+    /// ordering and symbolic factorization) this backend has done. A solve that reuses the
+    /// previous solver does none, so a sequence of QPs sharing their structure counts 1.
+    pub fn setups(&self) -> usize {
+        self.setups
+    }
+}
+
+/// A clone has the settings and the set-up count, not the solver (it sets up its own).
+impl Clone for ClarabelBackend {
+    fn clone(&self) -> Self {
+        ClarabelBackend {
+            settings: self.settings.clone(),
+            cache: None,
+            setups: self.setups,
+            reuse: self.reuse,
+        }
+    }
+}
+
+impl std::fmt::Debug for ClarabelBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ClarabelBackend")
+            .field("settings", &self.settings)
+            .field("setups", &self.setups)
+            .field("reuse", &self.reuse)
+            .field("solver_kept", &self.cache.is_some())
+            .finish()
     }
 }
 
@@ -91,9 +208,109 @@ enum RowMap {
     Ineq(Option<usize>, Option<usize>),
 }
 
+/// The conic form of a QP (see the module documentation) and the map back to its rows.
+struct Conic {
+    /// `A_c`, `mc × n`.
+    a: ClCsc<f64>,
+    /// The right-hand side, length `mc`.
+    b: Vec<f64>,
+    /// Number of equality (`ZeroCone`) rows, the first ones.
+    n_eq: usize,
+    /// The conic rows of each QP row.
+    map: Vec<RowMap>,
+}
+
+impl Conic {
+    fn new(qp: &Qp) -> Conic {
+        let (n, m) = (qp.n(), qp.m());
+        // Conic indices: equalities first, then the inequalities (upper before lower).
+        let mut map = vec![RowMap::Free; m];
+        let mut b = Vec::new();
+        for i in 0..m {
+            if qp.l[i] == qp.u[i] {
+                map[i] = RowMap::Eq(b.len());
+                b.push(qp.l[i]);
+            }
+        }
+        let n_eq = b.len();
+        for i in 0..m {
+            if qp.l[i] == qp.u[i] {
+                continue;
+            }
+            let up = qp.u[i].is_finite().then(|| {
+                b.push(qp.u[i]);
+                b.len() - 1
+            });
+            let lo = qp.l[i].is_finite().then(|| {
+                b.push(-qp.l[i]);
+                b.len() - 1
+            });
+            if up.is_some() || lo.is_some() {
+                map[i] = RowMap::Ineq(up, lo);
+            }
+        }
+        // A_c column by column: the equality entries of a column, then its inequality entries.
+        // Both groups have increasing conic indices along the column's increasing QP rows, and
+        // every equality index is below every inequality index, so the row indices are sorted.
+        let a = &qp.a;
+        let mut colptr = Vec::with_capacity(n + 1);
+        let mut rowval = Vec::with_capacity(a.nnz());
+        let mut nzval = Vec::with_capacity(a.nnz());
+        colptr.push(0);
+        for j in 0..n {
+            let col = a.colptr[j]..a.colptr[j + 1];
+            for p in col.clone() {
+                if let RowMap::Eq(k) = map[a.rowval[p]] {
+                    rowval.push(k);
+                    nzval.push(a.nzval[p]);
+                }
+            }
+            for p in col {
+                if let RowMap::Ineq(up, lo) = map[a.rowval[p]] {
+                    if let Some(k) = up {
+                        rowval.push(k);
+                        nzval.push(a.nzval[p]);
+                    }
+                    if let Some(k) = lo {
+                        rowval.push(k);
+                        nzval.push(-a.nzval[p]);
+                    }
+                }
+            }
+            colptr.push(rowval.len());
+        }
+        let a = ClCsc::new(b.len(), n, colptr, rowval, nzval);
+        Conic { a, b, n_eq, map }
+    }
+
+    fn cones(&self) -> Vec<SupportedConeT<f64>> {
+        let mc = self.b.len();
+        let mut cones = Vec::new();
+        if self.n_eq > 0 {
+            cones.push(ZeroConeT(self.n_eq));
+        }
+        if mc > self.n_eq {
+            cones.push(NonnegativeConeT(mc - self.n_eq));
+        }
+        cones
+    }
+}
+
+/// Whether a fresh Clarabel solver would leave the right-hand side `b` as it is: its presolve
+/// removes the nonnegative-cone rows above `(1 − 10ε)·get_infinity()` (and it caps every entry
+/// at `get_infinity()`), which a data update would not do.
+fn no_presolve(b: &[f64]) -> bool {
+    let bound = (1.0 - 10.0 * f64::EPSILON) * clarabel::get_infinity();
+    b.iter().all(|&v| v <= bound)
+}
+
 impl QpBackend for ClarabelBackend {
     fn name(&self) -> &'static str {
-        "clarabel"
+        if self.reuse {
+            "clarabel-reuse"
+        } else {
+            "clarabel"
+        }
     }
 
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
@@ -104,85 +321,8 @@ impl QpBackend for ClarabelBackend {
         // Checked for a uniform interface, then ignored.
         crate::osqp_backend::check_warm(warm, n, m)?;
 
-        // Build the conic rows: equalities first (ZeroCone), then inequalities (NonnegativeCone).
-        let at = qp.a.transpose(); // n × m: column i holds row i of A.
-        let at = &at;
-        let row =
-            |i: usize| (at.colptr[i]..at.colptr[i + 1]).map(move |p| (at.rowval[p], at.nzval[p]));
-        let mut map = vec![RowMap::Free; m];
-        let (mut ti, mut tj, mut tv) = (Vec::new(), Vec::new(), Vec::new());
-        let mut b = Vec::new();
-        for i in 0..m {
-            if qp.l[i] == qp.u[i] {
-                let k = b.len();
-                for (j, v) in row(i) {
-                    ti.push(k);
-                    tj.push(j);
-                    tv.push(v);
-                }
-                b.push(qp.l[i]);
-                map[i] = RowMap::Eq(k);
-            }
-        }
-        let n_eq = b.len();
-        for i in 0..m {
-            if qp.l[i] == qp.u[i] {
-                continue;
-            }
-            let mut up = None;
-            let mut lo = None;
-            if qp.u[i].is_finite() {
-                let k = b.len();
-                for (j, v) in row(i) {
-                    ti.push(k);
-                    tj.push(j);
-                    tv.push(v);
-                }
-                b.push(qp.u[i]);
-                up = Some(k);
-            }
-            if qp.l[i].is_finite() {
-                let k = b.len();
-                for (j, v) in row(i) {
-                    ti.push(k);
-                    tj.push(j);
-                    tv.push(-v);
-                }
-                b.push(-qp.l[i]);
-                lo = Some(k);
-            }
-            if up.is_some() || lo.is_some() {
-                map[i] = RowMap::Ineq(up, lo);
-            }
-        }
-        let mc = b.len();
-        let a_c = ClCsc::new_from_triplets(mc, n, ti, tj, tv);
-        let p_c = ClCsc::new(
-            n,
-            n,
-            qp.p.colptr.clone(),
-            qp.p.rowval.clone(),
-            qp.p.nzval.clone(),
-        );
-        let mut cones: Vec<SupportedConeT<f64>> = Vec::new();
-        if n_eq > 0 {
-            cones.push(ZeroConeT(n_eq));
-        }
-        if mc > n_eq {
-            cones.push(NonnegativeConeT(mc - n_eq));
-        }
-
-        let s = &self.settings;
-        let settings = DefaultSettings::<f64> {
-            max_iter: u32::try_from(s.max_iter).unwrap_or(u32::MAX),
-            time_limit: s.time_limit_s,
-            verbose: false,
-            tol_gap_abs: s.eps_abs,
-            tol_gap_rel: s.eps_rel.max(1e-16),
-            tol_feas: s.eps_abs,
-            ..DefaultSettings::default()
-        };
-
+        let conic = Conic::new(qp);
+        let mc = conic.b.len();
         let failed = |iterations: usize| QpSolution {
             x: vec![0.0; n],
             y: vec![0.0; m],
@@ -190,9 +330,74 @@ impl QpBackend for ClarabelBackend {
             iterations,
             solve_time_s: start.elapsed().as_secs_f64(),
         };
-        let mut solver = match DefaultSolver::new(&p_c, &qp.q, &a_c, &b, &cones, settings) {
-            Ok(solver) => solver,
-            Err(_) => return Ok(failed(0)),
+
+        // Reuse the solver of the previous solve when the structure is the same: new values of
+        // P, A_c, q and b replace the old ones (no set-up).
+        let fits = |c: &Cached| c.fits(qp, &conic, &self.settings) && no_presolve(&conic.b);
+        if let Some(c) = self.cache.as_mut().filter(|c| fits(c)) {
+            let s = &mut c.solver;
+            let updated = s
+                .update_P(&qp.p.nzval)
+                .and_then(|()| s.update_A(&conic.a.nzval))
+                .and_then(|()| s.update_q(&qp.q))
+                .and_then(|()| s.update_b(&conic.b));
+            if updated.is_err() {
+                self.cache = None;
+            }
+        } else {
+            self.cache = None;
+        }
+        // A new solver that cannot be updated (presolved) is used once, not kept.
+        let mut unkept = None;
+        let solver = match self.cache.as_mut() {
+            Some(c) => &mut c.solver,
+            None => {
+                let p_c = ClCsc::new(
+                    n,
+                    n,
+                    qp.p.colptr.clone(),
+                    qp.p.rowval.clone(),
+                    qp.p.nzval.clone(),
+                );
+                let s = &self.settings;
+                let settings = DefaultSettings::<f64> {
+                    max_iter: u32::try_from(s.max_iter).unwrap_or(u32::MAX),
+                    time_limit: s.time_limit_s,
+                    verbose: false,
+                    tol_gap_abs: s.eps_abs,
+                    tol_gap_rel: s.eps_rel.max(1e-16),
+                    tol_feas: s.eps_abs,
+                    ..DefaultSettings::default()
+                };
+                self.setups += 1;
+                let solver = match DefaultSolver::new(
+                    &p_c,
+                    &qp.q,
+                    &conic.a,
+                    &conic.b,
+                    &conic.cones(),
+                    settings,
+                ) {
+                    Ok(solver) => solver,
+                    Err(_) => return Ok(failed(0)),
+                };
+                if self.reuse && solver.is_data_update_allowed() {
+                    let c = self.cache.insert(Cached {
+                        solver,
+                        settings: self.settings.clone(),
+                        n,
+                        p_colptr: qp.p.colptr.clone(),
+                        p_rowval: qp.p.rowval.clone(),
+                        a_colptr: conic.a.colptr.clone(),
+                        a_rowval: conic.a.rowval.clone(),
+                        n_eq: conic.n_eq,
+                        mc,
+                    });
+                    &mut c.solver
+                } else {
+                    unkept.insert(solver)
+                }
+            }
         };
         solver.solve();
         let sol = &solver.solution;
@@ -202,7 +407,8 @@ impl QpBackend for ClarabelBackend {
         }
         let x = sol.x.clone();
         let z = &sol.z;
-        let y: Vec<f64> = map
+        let y: Vec<f64> = conic
+            .map
             .iter()
             .map(|r| match *r {
                 RowMap::Free => 0.0,

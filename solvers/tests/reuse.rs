@@ -1,12 +1,16 @@
 //! Reuse across solves of what depends on the sparsity pattern only: the Uzawa backend keeps
-//! the symbolic phase of its `LDLᵀ` of `P`, the OSQP backend keeps its set-up problem. A
-//! sequence of QPs sharing one pattern, solved by one backend instance, must give the results
-//! of a fresh instance per QP (bit for bit for Uzawa, to the tolerance for OSQP), the reuse
-//! must actually happen (counters), and a QP with another pattern must invalidate the cache.
+//! the symbolic phase of its `LDLᵀ` of `P`, the OSQP backend keeps its set-up problem, the
+//! Clarabel backend its solver (same structure of the conic form: patterns and the kinds of
+//! bounds of the rows). A sequence of QPs sharing one structure, solved by one backend
+//! instance, must give the results of a fresh instance per QP (bit for bit for Uzawa, to the
+//! tolerance for OSQP and Clarabel), the reuse must actually happen (counters), and a QP with
+//! another structure must invalidate the cache.
 //!
-//! The `#[ignore]` test `timing_reuse_vs_fresh` measures the gain on a QP of realistic size:
+//! The `#[ignore]` tests `timing_reuse_vs_fresh` (Uzawa, OSQP) and
+//! `timing_clarabel_reuse_vs_fresh` measure the gain on a QP of realistic size:
 //! `cargo test --release -p contactlab-solvers --test reuse -- --ignored --nocapture`.
 
+use contactlab_solvers::clarabel_backend::ClarabelBackend;
 use contactlab_solvers::osqp_backend::{OsqpBackend, OSQP_INFTY};
 use contactlab_solvers::uzawa::{LdlSymbolic, SparseLdl, UzawaBackend};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpSettings, QpSolution, QpStatus, WarmStart};
@@ -61,6 +65,13 @@ fn pattern(seed: u64, n: usize, m: usize) -> Pattern {
 /// one-sided, free) around a feasible point; infeasible (rows 0 and 1 equal, with equality
 /// bounds 1 apart) when `infeasible`.
 fn qp_with_values(pat: &Pattern, seed: u64, infeasible: bool) -> Qp {
+    qp_with_kinds(pat, seed, infeasible, None)
+}
+
+/// [`qp_with_values`], with the kind of bounds of each row (`0 | 1` equality, `2..=4` two-sided,
+/// `5 | 6` lower, `7 | 8` upper, `9` free) taken from `kinds` when given instead of drawn (the
+/// values drawn are the same).
+fn qp_with_kinds(pat: &Pattern, seed: u64, infeasible: bool, kinds: Option<&[u32]>) -> Qp {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let n = pat.n;
     let scale = rng.gen_range(0.5..2.0);
@@ -95,7 +106,8 @@ fn qp_with_values(pat: &Pattern, seed: u64, infeasible: bool) -> Qp {
     let (mut l, mut u) = (vec![0.0; pat.m], vec![0.0; pat.m]);
     for i in 0..pat.m {
         let (lo, hi) = (rng.gen_range(0.0..0.5), rng.gen_range(0.0..0.5));
-        (l[i], u[i]) = match rng.gen_range(0..10) {
+        let drawn = rng.gen_range(0..10);
+        (l[i], u[i]) = match kinds.map_or(drawn, |k| k[i]) {
             0 | 1 => (ax[i], ax[i]),
             2..=4 => (ax[i] - lo, ax[i] + hi),
             5 | 6 => (ax[i] - lo, f64::INFINITY),
@@ -301,6 +313,164 @@ fn osqp_reuse_matches_fresh_instances() {
     assert_eq!(c.setups(), reused.setups() + 1);
 }
 
+fn clarabel_settings() -> QpSettings {
+    QpSettings {
+        eps_abs: 1e-9,
+        eps_rel: 1e-9,
+        max_iter: 200,
+        time_limit_s: f64::INFINITY,
+    }
+}
+
+/// Bound kinds for `m` rows (see [`qp_with_kinds`]), rows 0 and 1 equalities so that the
+/// infeasible QP of a sequence has the structure of the others.
+fn fixed_kinds(m: usize, seed: u64) -> Vec<u32> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..m)
+        .map(|i| if i < 2 { 0 } else { rng.gen_range(0..10) })
+        .collect()
+}
+
+/// Solves `qp` with `reused` and with a fresh backend; checks that the statuses agree, that
+/// `x` and `y` agree to `1e-6` and that a solved point meets the tolerance. Returns the reused
+/// solution.
+fn clarabel_vs_fresh(reused: &mut ClarabelBackend, qp: &Qp, what: &str) -> QpSolution {
+    let r = reused.solve(qp, None).unwrap();
+    let mut fresh_backend = ClarabelBackend::new(clarabel_settings());
+    let f = fresh_backend.solve(qp, None).unwrap();
+    assert_eq!(fresh_backend.setups(), 1);
+    assert_eq!(r.status, f.status, "{what}");
+    if r.status == QpStatus::Solved {
+        assert!(close(&r.x, &f.x, 1e-6), "{what}: x {:?} vs {:?}", r.x, f.x);
+        assert!(close(&r.y, &f.y, 1e-6), "{what}: y {:?} vs {:?}", r.y, f.y);
+        assert!(qp.primal_residual(&r.x) < 1e-7, "{what}");
+        assert!(qp.dual_residual(&r.x, &r.y) < 1e-7, "{what}");
+    }
+    r
+}
+
+/// The default Clarabel backend (`clarabel`) sets up a new solver for every QP, even when the
+/// structure repeats, and gives what a fresh instance gives, bit for bit.
+#[test]
+fn clarabel_default_never_reuses() {
+    let pat = pattern(1, 30, 18);
+    let kinds = fixed_kinds(18, 5);
+    let mut b = ClarabelBackend::new(clarabel_settings());
+    assert_eq!(b.name(), "clarabel");
+    for k in 0..4u64 {
+        let qp = qp_with_kinds(&pat, 10 + k, false, Some(&kinds));
+        let r = b.solve(&qp, None).unwrap();
+        let f = ClarabelBackend::new(clarabel_settings())
+            .solve(&qp, None)
+            .unwrap();
+        assert_eq!(b.setups(), k as usize + 1);
+        assert_eq!((r.x, r.y, r.status), (f.x, f.y, f.status), "QP {k}");
+    }
+    assert_eq!(
+        ClarabelBackend::with_reuse(clarabel_settings()).name(),
+        "clarabel-reuse"
+    );
+}
+
+#[test]
+fn clarabel_reuse_matches_fresh_instances() {
+    let pat = pattern(1, 30, 18);
+    let kinds = fixed_kinds(18, 5);
+    let mut reused = ClarabelBackend::with_reuse(clarabel_settings());
+    let mut prev: Option<QpSolution> = None;
+    let mut statuses = Vec::new();
+    for k in 0..8u64 {
+        let qp = qp_with_kinds(&pat, 10 + k, k == 4, Some(&kinds));
+        // The warm start is ignored: the reused solver starts from Clarabel's default point.
+        let w = prev.as_ref().map(|p| next_warm(p, k as usize));
+        let r = reused.solve(&qp, w.as_ref()).unwrap();
+        let f = ClarabelBackend::new(clarabel_settings())
+            .solve(&qp, w.as_ref())
+            .unwrap();
+        assert_eq!(r.status, f.status, "QP {k}");
+        if r.status == QpStatus::Solved {
+            assert!(close(&r.x, &f.x, 1e-6), "QP {k}: x {:?} vs {:?}", r.x, f.x);
+            assert!(close(&r.y, &f.y, 1e-6), "QP {k}: y {:?} vs {:?}", r.y, f.y);
+            assert!(qp.primal_residual(&r.x) < 1e-7, "QP {k}");
+            assert!(qp.dual_residual(&r.x, &r.y) < 1e-7, "QP {k}");
+        }
+        statuses.push(r.status);
+        prev = Some(r);
+    }
+    assert_eq!(
+        statuses.iter().filter(|&&s| s == QpStatus::Solved).count(),
+        7
+    );
+    assert_eq!(statuses[4], QpStatus::PrimalInfeasible);
+    assert_eq!(reused.setups(), 1);
+    // Solved again after the infeasible QP, same as QP 5 above.
+    clarabel_vs_fresh(
+        &mut reused,
+        &qp_with_kinds(&pat, 15, false, Some(&kinds)),
+        "again",
+    );
+    assert_eq!(reused.setups(), 1);
+
+    // Same conic structure from another QP structure: a row switching from an upper to a lower
+    // bound keeps its conic row (with negated values), a free row added has no conic row.
+    let upper = (2..18).find(|&i| (7..=8).contains(&kinds[i])).unwrap();
+    let mut switched = kinds.clone();
+    switched[upper] = 5;
+    let qp = qp_with_kinds(&pat, 20, false, Some(&switched));
+    clarabel_vs_fresh(&mut reused, &qp, "upper → lower");
+    assert_eq!(reused.setups(), 1);
+    let mut wider = pattern(1, 30, 18);
+    wider.m = 19;
+    wider.a.extend([(18, 3), (18, 17)]);
+    let mut kinds19 = kinds.clone();
+    kinds19.push(9);
+    let qp = qp_with_kinds(&wider, 21, false, Some(&kinds19));
+    let r = clarabel_vs_fresh(&mut reused, &qp, "free row");
+    assert_eq!(r.status, QpStatus::Solved);
+    assert_eq!(r.y[18], 0.0);
+    assert_eq!(reused.setups(), 1);
+
+    // Another structure: an inequality row becoming an equality, another pattern of P, of A,
+    // another n: new set-ups, correct solutions.
+    let ineq = (2..18).find(|&i| (2..=8).contains(&kinds[i])).unwrap();
+    let mut eq = kinds.clone();
+    eq[ineq] = 0;
+    let qp = qp_with_kinds(&pat, 22, false, Some(&eq));
+    let r = clarabel_vs_fresh(&mut reused, &qp, "inequality → equality");
+    assert_eq!(r.status, QpStatus::Solved);
+    assert_eq!(reused.setups(), 2);
+    let others = [pattern(2, 30, 18), pattern(1, 30, 19), pattern(1, 31, 18)];
+    for (i, other) in others.iter().enumerate() {
+        let qp = qp_with_kinds(other, 60, false, Some(&fixed_kinds(other.m, 5)));
+        let r = clarabel_vs_fresh(&mut reused, &qp, &format!("pattern {i}"));
+        assert_eq!(r.status, QpStatus::Solved);
+        assert_eq!(reused.setups(), 3 + i);
+    }
+
+    // An upper bound above Clarabel's infinity: a fresh solver presolves the row away, so the
+    // kept solver (same conic structure) is not updated with it; the presolved solver is not
+    // kept either.
+    let other = &others[2];
+    let kinds = fixed_kinds(other.m, 5);
+    let qp = qp_with_kinds(other, 61, false, Some(&kinds));
+    let upper = (2..other.m).find(|&i| (7..=8).contains(&kinds[i])).unwrap();
+    let mut huge = qp.clone();
+    huge.u[upper] = 1e25;
+    let setups = reused.setups();
+    for (k, q) in [&huge, &huge, &qp, &qp].into_iter().enumerate() {
+        let r = clarabel_vs_fresh(&mut reused, q, &format!("huge bound {k}"));
+        assert_eq!(r.status, QpStatus::Solved);
+    }
+    assert_eq!(reused.setups(), setups + 3);
+
+    // A clone sets up its own solver.
+    let mut c = reused.clone();
+    c.solve(&qp, None).unwrap();
+    assert_eq!(c.setups(), reused.setups() + 1);
+    reused.solve(&qp, None).unwrap();
+    assert_eq!(c.setups(), reused.setups() + 1);
+}
+
 /// A QP of contactlab's size: `P` a banded stiffness-like matrix (bandwidth 4) plus a proximal
 /// diagonal, `A` contact rows on 6 variables each (lower bounds) coupling the two halves of the
 /// variables at matching places, plus a two-sided box on a tenth of the variables. (Contact rows
@@ -484,5 +654,120 @@ fn timing_reuse_vs_fresh() {
         1e3 * t_reuse,
         1e3 * t_fresh,
         1e3 * (t_fresh - t_reuse)
+    );
+}
+
+#[test]
+#[ignore = "timing; run with --ignored --nocapture"]
+fn timing_clarabel_reuse_vs_fresh() {
+    use clarabel::algebra::CscMatrix as ClCsc;
+    use clarabel::solver::{DefaultSettings, DefaultSolver, NonnegativeConeT};
+    let (n, contacts, count) = (20_000, 3_000, 20u64);
+    let qps: Vec<Qp> = (0..count).map(|k| big_qp(n, contacts, k)).collect();
+    println!(
+        "QP: n = {n}, m = {}, nnz(P) = {}, nnz(A) = {}, {count} solves",
+        qps[0].m(),
+        qps[0].p.nnz(),
+        qps[0].a.nnz()
+    );
+
+    // Set-up alone and data update alone, on a conic form of the same structure as the
+    // backend's (big_qp has lower bounds on the contact rows, two-sided boxes).
+    let conic = |qp: &Qp| {
+        let (mut ti, mut tj, mut tv, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut push = |i: usize, j: usize, v: f64| {
+            ti.push(i);
+            tj.push(j);
+            tv.push(v);
+        };
+        for j in 0..n {
+            for p in qp.a.colptr[j]..qp.a.colptr[j + 1] {
+                let (i, v) = (qp.a.rowval[p], qp.a.nzval[p]);
+                if i < contacts {
+                    push(i, j, -v);
+                } else {
+                    let k = contacts + 2 * (i - contacts);
+                    push(k, j, v);
+                    push(k + 1, j, -v);
+                }
+            }
+        }
+        for i in 0..qp.m() {
+            if i < contacts {
+                b.push(-qp.l[i]);
+            } else {
+                b.extend([qp.u[i], -qp.l[i]]);
+            }
+        }
+        (ClCsc::new_from_triplets(b.len(), n, ti, tj, tv), b)
+    };
+    let p = |qp: &Qp| {
+        ClCsc::new(
+            n,
+            n,
+            qp.p.colptr.clone(),
+            qp.p.rowval.clone(),
+            qp.p.nzval.clone(),
+        )
+    };
+    let (a0, b0) = conic(&qps[0]);
+    let (a1, b1) = conic(&qps[1]);
+    let cones = [NonnegativeConeT(b0.len())];
+    let settings = DefaultSettings::<f64> {
+        verbose: false,
+        ..DefaultSettings::default()
+    };
+    // Best of 3 for each part.
+    let (mut t_setup, mut t_update) = (f64::MAX, f64::MAX);
+    for _ in 0..3 {
+        let t = Instant::now();
+        let mut s =
+            DefaultSolver::new(&p(&qps[0]), &qps[0].q, &a0, &b0, &cones, settings.clone()).unwrap();
+        t_setup = t_setup.min(secs(t));
+        assert!(s.is_data_update_allowed());
+        let t = Instant::now();
+        s.update_P(&qps[1].p.nzval).unwrap();
+        s.update_A(&a1.nzval).unwrap();
+        s.update_q(&qps[1].q).unwrap();
+        s.update_b(&b1).unwrap();
+        t_update = t_update.min(secs(t));
+    }
+    println!(
+        "clarabel: set-up {:.2} ms; update of P, A, q and b {:.2} ms",
+        1e3 * t_setup,
+        1e3 * t_update
+    );
+
+    let st = clarabel_settings();
+    let mut reused = ClarabelBackend::with_reuse(st.clone());
+    let (mut t_reuse, mut t_fresh, mut it_r, mut it_f) = (0.0, 0.0, 0, 0);
+    for qp in &qps {
+        let t = Instant::now();
+        let r = reused.solve(qp, None).unwrap();
+        t_reuse += secs(t);
+        let t = Instant::now();
+        let f = ClarabelBackend::new(st.clone()).solve(qp, None).unwrap();
+        t_fresh += secs(t);
+        assert_eq!(r.status, QpStatus::Solved);
+        assert_eq!(f.status, QpStatus::Solved);
+        // This QP is ill-conditioned (P's smallest eigenvalues are near its 1e-2 diagonal):
+        // at the gap tolerance the two points differ by up to ~1e-4 in x, the objectives by
+        // ~1e-10 relative, both points feasible.
+        let (or, of) = (qp.objective(&r.x), qp.objective(&f.x));
+        assert!((or - of).abs() <= 1e-8 * of.abs().max(1.0), "{or} vs {of}");
+        assert!(close(&r.x, &f.x, 1e-3));
+        assert!(qp.primal_residual(&r.x) < 1e-7 && qp.dual_residual(&r.x, &r.y) < 1e-7);
+        it_r += r.iterations;
+        it_f += f.iterations;
+    }
+    assert_eq!(reused.setups(), 1);
+    println!(
+        "clarabel {count} solves: reuse {:.1} ms ({it_r} IP iterations, {:.2} ms/solve), fresh \
+         {:.1} ms ({it_f}, {:.2} ms/solve), saved {:.2} ms/solve",
+        1e3 * t_reuse,
+        1e3 * t_reuse / count as f64,
+        1e3 * t_fresh,
+        1e3 * t_fresh / count as f64,
+        1e3 * (t_fresh - t_reuse) / count as f64
     );
 }
