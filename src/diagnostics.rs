@@ -5,7 +5,7 @@
 //! its support) counts for both.
 
 use crate::geometry::point_edge_distance;
-use crate::mesh::Mesh;
+use crate::mesh::{BodyKind, Mesh};
 use crate::pairs::PointEdgePair;
 
 /// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact).
@@ -50,4 +50,453 @@ pub fn contact_pattern(
         }
     }
     out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lemma 5.4 multipliers and the Lemma 5.6 residual of a converged run (SPEC §3).
+// ---------------------------------------------------------------------------------------------
+
+use crate::broad_phase::point_edge_near;
+use crate::energy::TotalEnergy;
+use crate::rows::{point_edge_rows, PointEdgeRow};
+use contactlab_solvers::uzawa::SparseLdl;
+use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus};
+use std::collections::HashMap;
+
+/// Settings of [`converged_diagnostics`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct DiagnosticSettings {
+    /// A row `n·(φ(a_i) − φ(x)) ≥ ε` of T(φ_h) is active when its value is at most
+    /// `ε + active_tol`. Default `2·(1e-6·ε + 1e-11)`: twice the sub-problems' row margin
+    /// (`InnerSettings::margin_rel`, `margin_abs`), the count the outer loop reports.
+    pub active_tol: f64,
+    /// Tikhonov weight τ of the canonical-dual problem, relative to the largest diagonal entry
+    /// of `A Aᵀ` (see [`converged_diagnostics`]). Default `1e-10`.
+    pub tikhonov_rel: f64,
+}
+
+impl DiagnosticSettings {
+    /// The defaults for a run with minimal distance `eps`.
+    pub fn for_eps(eps: f64) -> Self {
+        DiagnosticSettings {
+            active_tol: 2.0 * (1e-6 * eps + 1e-11),
+            tikhonov_rel: 1e-10,
+        }
+    }
+}
+
+/// One contact pair at the fixed point: its rows, canonical duals and per-length multiplier.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PairMultiplier {
+    /// Vertex x.
+    pub x: usize,
+    /// Edge a.
+    pub a: usize,
+    /// `dist(φ_h(x), φ_h(a))`.
+    pub distance: f64,
+    /// Barycentric coordinates `(α⁰, α¹)` of the closest point `p_{a,x}` on the edge.
+    pub alpha: [f64; 2],
+    /// Whether each row is active.
+    pub active: [bool; 2],
+    /// Canonical duals `(λ⁰, λ¹)` of the two rows, QP scaling (`h·λ` per row, SPEC §3).
+    pub mu: [f64; 2],
+    /// Per-length multiplier `λ_{a,x} = (μ⁰ + μ¹)/h`.
+    pub lambda: f64,
+}
+
+/// Lemma 5.4 and Lemma 5.6 quantities at a converged configuration φ_h.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ConvergedDiagnostics {
+    /// Mesh size h used for the scalings.
+    pub h: f64,
+    /// Pairs of T(φ_h) with at least one active row.
+    pub active_pairs: usize,
+    /// Active rows of T(φ_h).
+    pub active_rows: usize,
+    /// `‖J'(φ_h) − Σ μ ∇row‖_∞` over the free dofs with the canonical duals (Lemma 5.4
+    /// stationarity; 0 at an exact fixed point).
+    pub stationarity_canonical: f64,
+    /// The same with the raw duals of the last sub-problem (rows built at the previous
+    /// iterate), as returned by the backend.
+    pub stationarity_raw: f64,
+    /// `‖J'(φ_h)‖_∞` over the free dofs, the scale of the two stationarity residuals.
+    pub gradient_norm: f64,
+    /// Complementarity of the raw duals: `max μ_r·|value_r(φ_h) − ε|` over the last
+    /// sub-problem's rows.
+    pub complementarity_raw: f64,
+    /// Most negative raw dual (0 when all are ≥ 0).
+    pub min_raw_dual: f64,
+    /// `‖λ‖_h = (Σ h λ_{a,x}²)^{1/2}`.
+    pub lambda_norm_h: f64,
+    /// `C(φ_h) = max_a #{x : (a, x) active}` (Lemma 5.6).
+    pub c_phi: usize,
+    /// `max_x #{a : (a, x) active}` (Remark 5.2: at most six in 2D).
+    pub max_edges_per_vertex: usize,
+    /// `‖R‖_{H⁻¹} = (rᵀ G⁻¹ r)^{1/2}`, Lemma 5.6 residual with the canonical duals.
+    pub residual_hm1: f64,
+    /// `B = √C(φ_h)·‖λ‖_h·h`.
+    pub bound: f64,
+    /// `‖R‖ / B` (NaN when B = 0).
+    pub ratio: f64,
+    /// Status of the canonical-dual QP (`solved` or the backend's status).
+    pub dual_qp_status: &'static str,
+    /// The active pairs.
+    pub pairs: Vec<PairMultiplier>,
+}
+
+/// Errors of [`converged_diagnostics`].
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnosticsError {
+    /// The configuration has a pair at distance 0 (no normal).
+    #[error("the configuration has a contact pair at distance 0: no rows of T(φ_h)")]
+    ZeroDistance,
+    /// The H¹ Gram matrix on the free dofs could not be factorized.
+    #[error("the H1 Gram matrix on the free dofs is not positive definite (a free vertex belongs to no element?)")]
+    Gram,
+    /// The canonical-dual QP was rejected.
+    #[error("canonical-dual QP rejected: {0}")]
+    Qp(#[from] QpError),
+}
+
+/// Free dof numbering: `col[dof]`, `usize::MAX` for a fixed dof.
+fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
+    let mut col = vec![usize::MAX; mesh.x_ref.len()];
+    let mut k = 0;
+    for v in 0..mesh.nv() {
+        if !mesh.fixed[v] {
+            for c in 0..mesh.dim {
+                col[mesh.dim * v + c] = k;
+                k += 1;
+            }
+        }
+    }
+    (col, k)
+}
+
+/// The H¹ Gram matrix `G = M + K` of P1 functions on the reference mesh (curves: their edges;
+/// solids: their triangles), one copy per coordinate, restricted to the free dofs (upper
+/// triangle, CSC).
+pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
+    let (col, nfree) = free_cols(mesh);
+    let d = mesh.dim;
+    let mut trip: Vec<(usize, usize, f64)> = Vec::new();
+    let mut add = |vs: &[usize], m: &dyn Fn(usize, usize) -> f64| {
+        for (i, &vi) in vs.iter().enumerate() {
+            for (j, &vj) in vs.iter().enumerate() {
+                for c in 0..d {
+                    let (ri, rj) = (col[d * vi + c], col[d * vj + c]);
+                    if ri != usize::MAX && rj != usize::MAX && ri <= rj {
+                        trip.push((ri, rj, m(i, j)));
+                    }
+                }
+            }
+        }
+    };
+    let xr = &mesh.x_ref;
+    for body in &mesh.bodies {
+        match body.kind {
+            BodyKind::Curve => {
+                for &e in &body.edges {
+                    let [a, b] = mesh.edges[e];
+                    let l = (Mesh::p2(xr, a) - Mesh::p2(xr, b)).norm();
+                    add(&[a, b], &|i, j| {
+                        let mass = if i == j { l / 3.0 } else { l / 6.0 };
+                        let stiff = if i == j { 1.0 / l } else { -1.0 / l };
+                        mass + stiff
+                    });
+                }
+            }
+            BodyKind::Solid => {
+                for &t in &body.triangles {
+                    let vs = mesh.triangles[t];
+                    let p: Vec<_> = vs.iter().map(|&v| Mesh::p2(xr, v)).collect();
+                    let area = 0.5 * (p[1] - p[0]).perp(&(p[2] - p[0]));
+                    // ∇φ_i = perp(opposite edge) / (2·area), rotated inward.
+                    let grads: Vec<nalgebra::Vector2<f64>> = (0..3)
+                        .map(|i| {
+                            let e = p[(i + 2) % 3] - p[(i + 1) % 3];
+                            nalgebra::Vector2::new(-e.y, e.x) / (2.0 * area)
+                        })
+                        .collect();
+                    add(&vs, &|i, j| {
+                        let mass = if i == j { area / 6.0 } else { area / 12.0 };
+                        mass + area * grads[i].dot(&grads[j])
+                    });
+                }
+            }
+        }
+    }
+    CscMatrix::from_triplets(nfree, nfree, &trip).expect("indices in range, values finite")
+}
+
+/// The gradient of a row `n·(φ(a_i) − φ(x))` as `(dof, value)` entries on the free dofs.
+fn row_gradient(r: &PointEdgeRow, i: usize, col: &[usize], out: &mut Vec<(usize, f64)>) {
+    out.clear();
+    for c in 0..2 {
+        let ca = col[2 * r.edge[i] + c];
+        if ca != usize::MAX {
+            out.push((ca, r.n[c]));
+        }
+        let cx = col[2 * r.pair.x + c];
+        if cx != usize::MAX {
+            out.push((cx, -r.n[c]));
+        }
+    }
+}
+
+/// `g − Σ_r μ_r ∇row_r` on the free dofs.
+fn stationarity_vector(
+    g: &[f64],
+    rows: &[PointEdgeRow],
+    mu: &[[f64; 2]],
+    col: &[usize],
+) -> Vec<f64> {
+    let mut s = g.to_vec();
+    let mut buf = Vec::new();
+    for (r, m) in rows.iter().zip(mu) {
+        for (i, &mi) in m.iter().enumerate() {
+            if mi != 0.0 {
+                row_gradient(r, i, col, &mut buf);
+                for &(k, v) in &buf {
+                    s[k] -= mi * v;
+                }
+            }
+        }
+    }
+    s
+}
+
+/// `‖J'(x) − Σ_r μ_r ∇row_r‖_∞` over the free dofs: the Lemma 5.4 stationarity residual of
+/// duals `mu` (two per row) with the sign of SPEC §3.
+pub fn stationarity_residual(
+    mesh: &Mesh,
+    energy: &TotalEnergy,
+    x: &[f64],
+    rows: &[PointEdgeRow],
+    mu: &[[f64; 2]],
+) -> f64 {
+    let (col, nfree) = free_cols(mesh);
+    let gfull = energy.gradient(x);
+    let mut g = vec![0.0; nfree];
+    for (dof, &c) in col.iter().enumerate() {
+        if c != usize::MAX {
+            g[c] = gfull[dof];
+        }
+    }
+    max_abs(&stationarity_vector(&g, rows, mu, &col))
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// Lemma 5.4 / 5.6 diagnostics at a converged configuration `x` (= φ_h) of a run whose last
+/// sub-problem had rows `last_rows` and duals `last_mult` (SPEC §3).
+///
+/// * **Rows** of T(φ_h): every `point_edge` pair closer than `ε + active_tol + 1e-9·ε`, built at
+///   ψ = φ_h; a row is active when its value is at most `ε + active_tol`.
+/// * **Canonical duals** (SPEC §3, "Uniqueness"): with `A` the active rows' gradients and
+///   `g = J'(φ_h)` on the free dofs, the duals minimize `½|Aᵀμ − g|² + ½τ|μ|²` over `μ ≥ 0`,
+///   `τ = tikhonov_rel · max diag(AAᵀ)`: a non-negative least-squares problem whose solution
+///   tends to the minimum-norm one of the stationarity set as τ → 0. It is solved as a QP by
+///   `backend` (the caller picks it and its tolerance). Inactive rows get 0, so complementary
+///   slackness holds by construction; the raw duals' complementarity is reported apart.
+/// * **Lemma 5.6**: `r = g − Σ (μ⁰ + μ¹)(α⁰∇row⁰ + α¹∇row¹)`, the nodal vector of
+///   `⟨R, φ̂⟩ = ⟨J'(φ_h), φ̂⟩ − Σ hλ n·(φ̂(p) − φ̂(x))`, and `‖R‖ = (rᵀG⁻¹r)^{1/2}` with the H¹
+///   Gram matrix `G` ([`h1_gram`], factorized by the sparse `LDLᵀ` also used by the Uzawa
+///   backend).
+#[allow(clippy::too_many_arguments)] // the run's state, its last sub-problem and the QP solver
+pub fn converged_diagnostics(
+    mesh: &Mesh,
+    energy: &TotalEnergy,
+    x: &[f64],
+    eps: f64,
+    h: f64,
+    last_rows: &[PointEdgeRow],
+    last_mult: &[[f64; 2]],
+    backend: &mut dyn QpBackend,
+    settings: &DiagnosticSettings,
+) -> Result<ConvergedDiagnostics, DiagnosticsError> {
+    let (col, nfree) = free_cols(mesh);
+    let gfull = energy.gradient(x);
+    let mut g = vec![0.0; nfree];
+    for (dof, &c) in col.iter().enumerate() {
+        if c != usize::MAX {
+            g[c] = gfull[dof];
+        }
+    }
+    let gradient_norm = max_abs(&g);
+
+    // Raw duals: stationarity against the last rows, complementarity at φ_h.
+    let stationarity_raw = max_abs(&stationarity_vector(&g, last_rows, last_mult, &col));
+    let mut complementarity_raw = 0.0f64;
+    let mut min_raw_dual = 0.0f64;
+    for (r, m) in last_rows.iter().zip(last_mult) {
+        let v = r.values(x);
+        for i in 0..2 {
+            complementarity_raw = complementarity_raw.max(m[i] * (v[i] - eps).abs());
+            min_raw_dual = min_raw_dual.min(m[i]);
+        }
+    }
+
+    // Rows of T(φ_h) near contact.
+    let reach = eps + settings.active_tol + 1e-9 * eps;
+    let near: Vec<PointEdgePair> =
+        point_edge_near(mesh, x, &[], &vec![reach; mesh.edges.len()], true)
+            .into_iter()
+            .map(|p| p.pair)
+            .collect();
+    let rows = point_edge_rows(mesh, x, &near).ok_or(DiagnosticsError::ZeroDistance)?;
+    let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row 0|1)
+    let mut active_flags = vec![[false; 2]; rows.len()];
+    for (k, r) in rows.iter().enumerate() {
+        let v = r.values(x);
+        for i in 0..2 {
+            if v[i] - eps <= settings.active_tol {
+                active_idx.push((k, i));
+                active_flags[k][i] = true;
+            }
+        }
+    }
+
+    // Canonical duals: min ½|Aᵀμ − g|² + ½τ|μ|², μ ≥ 0, as a QP in μ.
+    let m = active_idx.len();
+    let mut mu = vec![[0.0f64; 2]; rows.len()];
+    let mut dual_qp_status = "solved";
+    if m > 0 {
+        // Column lists of Aᵀ: for each free dof, the active rows touching it.
+        let mut grads: Vec<Vec<(usize, f64)>> = Vec::with_capacity(m);
+        let mut buf = Vec::new();
+        for &(k, i) in &active_idx {
+            row_gradient(&rows[k], i, &col, &mut buf);
+            grads.push(buf.clone());
+        }
+        let mut by_dof: HashMap<usize, Vec<(usize, f64)>> = HashMap::new();
+        for (j, gr) in grads.iter().enumerate() {
+            for &(d, v) in gr {
+                by_dof.entry(d).or_default().push((j, v));
+            }
+        }
+        let mut ptrip: HashMap<(usize, usize), f64> = HashMap::new();
+        for list in by_dof.values() {
+            for &(j1, v1) in list {
+                for &(j2, v2) in list {
+                    if j1 <= j2 {
+                        *ptrip.entry((j1, j2)).or_insert(0.0) += v1 * v2;
+                    }
+                }
+            }
+        }
+        let dmax = (0..m)
+            .map(|j| ptrip.get(&(j, j)).copied().unwrap_or(0.0))
+            .fold(0.0f64, f64::max);
+        let tau = settings.tikhonov_rel * dmax.max(1.0);
+        for j in 0..m {
+            *ptrip.entry((j, j)).or_insert(0.0) += tau;
+        }
+        let mut pt: Vec<(usize, usize, f64)> =
+            ptrip.into_iter().map(|((i, j), v)| (i, j, v)).collect();
+        pt.sort_by_key(|t| (t.1, t.0));
+        let q: Vec<f64> = grads
+            .iter()
+            .map(|gr| -gr.iter().map(|&(d, v)| v * g[d]).sum::<f64>())
+            .collect();
+        let ident: Vec<(usize, usize, f64)> = (0..m).map(|j| (j, j, 1.0)).collect();
+        let qp = Qp {
+            p: CscMatrix::from_triplets(m, m, &pt)?,
+            q,
+            a: CscMatrix::from_triplets(m, m, &ident)?,
+            l: vec![0.0; m],
+            u: vec![f64::INFINITY; m],
+        };
+        let sol = backend.solve(&qp, None)?;
+        if sol.status != QpStatus::Solved {
+            dual_qp_status = sol.status.as_str();
+        }
+        for (j, &(k, i)) in active_idx.iter().enumerate() {
+            mu[k][i] = sol.x[j].max(0.0);
+        }
+    }
+    let stationarity_canonical = max_abs(&stationarity_vector(&g, &rows, &mu, &col));
+
+    // Pairs, λ, counts.
+    let mut pairs = Vec::new();
+    let mut per_edge: HashMap<usize, usize> = HashMap::new();
+    let mut per_vertex: HashMap<usize, usize> = HashMap::new();
+    let mut lambda_sq = 0.0;
+    for (k, r) in rows.iter().enumerate() {
+        if !(active_flags[k][0] || active_flags[k][1]) {
+            continue;
+        }
+        *per_edge.entry(r.pair.a).or_insert(0) += 1;
+        *per_vertex.entry(r.pair.x).or_insert(0) += 1;
+        let lambda = (mu[k][0] + mu[k][1]) / h;
+        lambda_sq += h * lambda * lambda;
+        pairs.push(PairMultiplier {
+            x: r.pair.x,
+            a: r.pair.a,
+            distance: r.distance,
+            alpha: r.alpha,
+            active: active_flags[k],
+            mu: mu[k],
+            lambda,
+        });
+    }
+    let c_phi = per_edge.values().copied().max().unwrap_or(0);
+    let max_edges_per_vertex = per_vertex.values().copied().max().unwrap_or(0);
+    let lambda_norm_h = lambda_sq.sqrt();
+
+    // Lemma 5.6 residual: r = g − Σ (μ⁰+μ¹)(α⁰∇row⁰ + α¹∇row¹).
+    let mut rvec = g.clone();
+    let mut buf = Vec::new();
+    for (k, r) in rows.iter().enumerate() {
+        let s = mu[k][0] + mu[k][1];
+        if s == 0.0 {
+            continue;
+        }
+        for i in 0..2 {
+            row_gradient(r, i, &col, &mut buf);
+            for &(d, v) in &buf {
+                rvec[d] -= s * r.alpha[i] * v;
+            }
+        }
+    }
+    let residual_hm1 = if nfree == 0 {
+        0.0
+    } else {
+        let gram = h1_gram(mesh);
+        let ldl = SparseLdl::factor(&gram).ok_or(DiagnosticsError::Gram)?;
+        let mut z = rvec.clone();
+        ldl.solve_in_place(&mut z);
+        rvec.iter()
+            .zip(&z)
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt()
+    };
+    let bound = (c_phi as f64).sqrt() * lambda_norm_h * h;
+    let ratio = if bound > 0.0 {
+        residual_hm1 / bound
+    } else {
+        f64::NAN
+    };
+    Ok(ConvergedDiagnostics {
+        h,
+        active_pairs: pairs.len(),
+        active_rows: m,
+        stationarity_canonical,
+        stationarity_raw,
+        gradient_norm,
+        complementarity_raw,
+        min_raw_dual,
+        lambda_norm_h,
+        c_phi,
+        max_edges_per_vertex,
+        residual_hm1,
+        bound,
+        ratio,
+        dual_qp_status,
+        pairs,
+    })
 }

@@ -23,6 +23,7 @@ pub mod mesh;
 pub mod outer;
 pub mod output;
 pub mod pairs;
+pub mod presets;
 pub mod rows;
 pub mod scene;
 pub mod subproblem;

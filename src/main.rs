@@ -6,8 +6,11 @@
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use contactlab::broad_phase::point_edge_near;
-use contactlab::diagnostics::contact_pattern;
-use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, TrustSettings};
+use contactlab::diagnostics::{
+    contact_pattern, converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
+    PairMultiplier,
+};
+use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
 use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
 use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
@@ -127,6 +130,8 @@ fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
 
 #[derive(serde::Serialize)]
 struct Summary {
+    /// Lemma 5.4 / 5.6 diagnostics (converged runs only).
+    diagnostics: Option<DiagSummary>,
     scene: String,
     dim: usize,
     n: usize,
@@ -341,7 +346,21 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         &out.join("shapes.svg"),
         &shapes_and_energy_svg(&shapes, &energies, &title),
     )?;
+    let diagnostics = if res.status == RunStatus::Converged {
+        let (diag, tol) = lemma_diagnostics(mesh, &scene.energy, &res, scene.eps, scene.h)?;
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for p in &diag.pairs {
+            w.serialize(PairRow::from(p))?;
+        }
+        write_atomic(&out.join("multipliers.csv"), &w.into_inner()?)?;
+        Some((diag, tol))
+    } else {
+        None
+    };
     let summary = Summary {
+        diagnostics: diagnostics
+            .as_ref()
+            .map(|(d, tol)| DiagSummary::new(d, *tol)),
         scene: scene.name.clone(),
         dim: 2,
         n: params.n,
@@ -385,6 +404,124 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
     }
     Ok(())
+}
+
+/// The canonical-dual QP of the diagnostics is solved by Clarabel at the first of these
+/// tolerances at which it reports `solved` (measured: at n = 20 on the balloons, 1e-12 ended
+/// `numerical_error`).
+const DIAG_QP_TOLS: [f64; 3] = [1e-12, 1e-10, 1e-9];
+
+/// Lemma 5.4 / 5.6 diagnostics of a converged run (Clarabel at the first tolerance of
+/// [`DIAG_QP_TOLS`] that solves the canonical-dual QP), and that tolerance.
+fn lemma_diagnostics(
+    mesh: &contactlab::mesh::Mesh,
+    energy: &contactlab::energy::TotalEnergy,
+    res: &contactlab::outer::RunResult,
+    eps: f64,
+    h: f64,
+) -> Result<(ConvergedDiagnostics, f64)> {
+    let mut last = None;
+    for tol in DIAG_QP_TOLS {
+        let st = contactlab_solvers::QpSettings {
+            eps_abs: tol,
+            eps_rel: tol,
+            ..Default::default()
+        };
+        let mut b = backend_from_name("clarabel", &st)?;
+        let d = converged_diagnostics(
+            mesh,
+            energy,
+            &res.x,
+            eps,
+            h,
+            &res.last_rows,
+            &res.multipliers,
+            b.as_mut(),
+            &DiagnosticSettings::for_eps(eps),
+        )?;
+        let solved = d.dual_qp_status == "solved";
+        last = Some((d, tol));
+        if solved {
+            break;
+        }
+    }
+    Ok(last.expect("DIAG_QP_TOLS is not empty"))
+}
+
+/// One row of `multipliers.csv`: an active pair at the fixed point.
+#[derive(serde::Serialize)]
+struct PairRow {
+    vertex: usize,
+    edge: usize,
+    distance: f64,
+    alpha0: f64,
+    alpha1: f64,
+    active0: bool,
+    active1: bool,
+    mu0: f64,
+    mu1: f64,
+    lambda: f64,
+}
+
+impl From<&PairMultiplier> for PairRow {
+    fn from(p: &PairMultiplier) -> Self {
+        PairRow {
+            vertex: p.x,
+            edge: p.a,
+            distance: p.distance,
+            alpha0: p.alpha[0],
+            alpha1: p.alpha[1],
+            active0: p.active[0],
+            active1: p.active[1],
+            mu0: p.mu[0],
+            mu1: p.mu[1],
+            lambda: p.lambda,
+        }
+    }
+}
+
+/// The scalar part of [`ConvergedDiagnostics`] (the pairs go to `multipliers.csv`).
+#[derive(serde::Serialize)]
+struct DiagSummary {
+    h: f64,
+    active_pairs: usize,
+    active_rows: usize,
+    stationarity_canonical: f64,
+    stationarity_raw: f64,
+    gradient_norm: f64,
+    complementarity_raw: f64,
+    min_raw_dual: f64,
+    lambda_norm_h: f64,
+    c_phi: usize,
+    max_edges_per_vertex: usize,
+    residual_hm1: f64,
+    bound: f64,
+    ratio: f64,
+    dual_qp_status: &'static str,
+    dual_qp_tol: f64,
+}
+
+impl DiagSummary {
+    fn new(d: &ConvergedDiagnostics, dual_qp_tol: f64) -> Self {
+        DiagSummary {
+            dual_qp_tol,
+            h: d.h,
+            active_pairs: d.active_pairs,
+            active_rows: d.active_rows,
+            stationarity_canonical: d.stationarity_canonical,
+            stationarity_raw: d.stationarity_raw,
+            gradient_norm: d.gradient_norm,
+            complementarity_raw: d.complementarity_raw,
+            min_raw_dual: d.min_raw_dual,
+            lambda_norm_h: d.lambda_norm_h,
+            c_phi: d.c_phi,
+            max_edges_per_vertex: d.max_edges_per_vertex,
+            residual_hm1: d.residual_hm1,
+            bound: d.bound,
+            ratio: d.ratio,
+            dual_qp_status: d.dual_qp_status,
+        }
+    }
 }
 
 fn main() {
