@@ -61,7 +61,7 @@ use crate::energy::TotalEnergy;
 use crate::rows::{point_edge_rows, PointEdgeRow};
 use contactlab_solvers::uzawa::SparseLdl;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 /// Settings of [`converged_diagnostics`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -171,6 +171,28 @@ fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
         }
     }
     (col, k)
+}
+
+/// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (the fixed dofs
+/// are equal in any two configurations of one scene). The position error of the speed/accuracy
+/// trade-off.
+pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
+    let (col, nfree) = free_cols(mesh);
+    let mut d = vec![0.0; nfree];
+    for (k, &c) in col.iter().enumerate() {
+        if c != usize::MAX {
+            d[c] = x[k] - y[k];
+        }
+    }
+    let g = h1_gram(mesh);
+    let mut gd = vec![0.0; nfree];
+    g.sym_upper_mul_add(1.0, &d, &mut gd);
+    d.iter()
+        .zip(&gd)
+        .map(|(a, b)| a * b)
+        .sum::<f64>()
+        .max(0.0)
+        .sqrt()
 }
 
 /// The H¹ Gram matrix `G = M + K` of P1 functions on the reference mesh (curves: their edges;
@@ -371,13 +393,13 @@ pub fn converged_diagnostics(
             row_gradient(&rows[k], i, &col, &mut buf);
             grads.push(buf.clone());
         }
-        let mut by_dof: HashMap<usize, Vec<(usize, f64)>> = HashMap::new();
+        let mut by_dof: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
         for (j, gr) in grads.iter().enumerate() {
             for &(d, v) in gr {
                 by_dof.entry(d).or_default().push((j, v));
             }
         }
-        let mut ptrip: HashMap<(usize, usize), f64> = HashMap::new();
+        let mut ptrip: BTreeMap<(usize, usize), f64> = BTreeMap::new();
         for list in by_dof.values() {
             for &(j1, v1) in list {
                 for &(j2, v2) in list {

@@ -16,6 +16,7 @@
 
 pub mod broad_phase;
 pub mod bvh;
+pub mod capture;
 pub mod diagnostics;
 pub mod energy;
 pub mod geometry;

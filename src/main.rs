@@ -6,16 +6,14 @@
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use contactlab::broad_phase::point_edge_near;
-use contactlab::diagnostics::{
-    contact_pattern, converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
-    PairMultiplier,
-};
+use contactlab::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
 use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
 use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
+use contactlab::presets::Accuracy;
 use contactlab::scene::balloons::{self, classify_state, BalloonsParams};
-use contactlab_solvers::{backend_from_name, default_settings};
+use contactlab_solvers::backend_from_name;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -30,7 +28,10 @@ struct Cli {
     command: Option<Command>,
 }
 
+mod case;
+mod plot_cmd;
 mod scaling_cmd;
+mod sweep;
 
 #[derive(Subcommand)]
 enum Command {
@@ -39,6 +40,10 @@ enum Command {
     /// The scaling experiment: time per outer iteration, pairs, rows and peak memory against
     /// the number of vertices, per pruning mode (CSV + log-log SVG).
     Scaling(scaling_cmd::ScalingArgs),
+    /// Run a sweep file: one CSV row per run, flushed as each ends (README, "Sweeps").
+    Sweep(sweep::SweepArgs),
+    /// Log-log SVG of sweep CSV columns with fitted slopes (README, "Plots").
+    Plot(plot_cmd::PlotArgs),
     /// One case of the scaling experiment (run by `scaling` in a child process).
     #[command(hide = true)]
     ScalingCase(scaling_cmd::CaseArgs),
@@ -85,13 +90,18 @@ struct RunArgs {
     /// Do not warm-start the QP duals (OSQP, Uzawa; Clarabel never warm-starts).
     #[arg(long)]
     no_warm_start: bool,
-    /// Relative energy tolerance of the outer stopping rule.
-    #[arg(long, default_value_t = 1e-10)]
-    tol_j: f64,
+    /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; README,
+    /// "Accuracy presets"). --qp-tol and --tol-j override its values.
+    #[arg(long, default_value = "default", value_parser = parse_accuracy)]
+    accuracy: Accuracy,
+    /// Relative energy tolerance of the outer stopping rule (default: the preset's).
+    #[arg(long)]
+    tol_j: Option<f64>,
     /// Maximum outer iterations.
     #[arg(long, default_value_t = 2000)]
     max_outer: usize,
-    /// Backend tolerance (eps_abs = eps_rel); default 1e-9 clarabel, 1e-8 uzawa, 1e-6 osqp.
+    /// Backend tolerance (eps_abs = eps_rel); default: the preset's (default preset: 1e-9
+    /// clarabel, 1e-8 uzawa, 1e-6 osqp).
     #[arg(long)]
     qp_tol: Option<f64>,
     /// Run directory (default runs/<scene>-default).
@@ -103,6 +113,11 @@ struct RunArgs {
     /// No progress line.
     #[arg(long)]
     quiet: bool,
+}
+
+fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
+    Accuracy::from_name(s)
+        .ok_or_else(|| format!("--accuracy {s:?}: expected one of low, default, high"))
 }
 
 fn parse_pruning(s: &str) -> Result<Pruning, String> {
@@ -155,6 +170,7 @@ struct Summary {
     params: BalloonsParams,
     settings: OuterSettings,
     qp_tol: f64,
+    accuracy: &'static str,
 }
 
 fn run_cmd(a: RunArgs) -> Result<()> {
@@ -181,14 +197,14 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         params.heights.copy_from_slice(hs);
     }
     let scene = balloons::build(&params)?;
-    let mut qps = default_settings(&a.backend);
+    let mut qps = a.accuracy.qp_settings(&a.backend);
     if let Some(t) = a.qp_tol {
         qps.eps_abs = t;
         qps.eps_rel = t;
     }
     let mut backend = backend_from_name(&a.backend, &qps)?;
     let mut settings = OuterSettings {
-        tol_j: a.tol_j,
+        tol_j: a.tol_j.unwrap_or(a.accuracy.tol_j()),
         max_outer: a.max_outer,
         pruning: a.pruning,
         lazy_start: a.lazy_start,
@@ -347,7 +363,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         &shapes_and_energy_svg(&shapes, &energies, &title),
     )?;
     let diagnostics = if res.status == RunStatus::Converged {
-        let (diag, tol) = lemma_diagnostics(mesh, &scene.energy, &res, scene.eps, scene.h)?;
+        let (diag, tol) = case::lemma_diagnostics(&scene, &res)?;
         let mut w = csv::Writer::from_writer(Vec::new());
         for p in &diag.pairs {
             w.serialize(PairRow::from(p))?;
@@ -384,6 +400,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         params,
         settings,
         qp_tol: qps.eps_abs,
+        accuracy: a.accuracy.as_str(),
     };
     write_atomic(
         &out.join("summary.json"),
@@ -404,48 +421,6 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
     }
     Ok(())
-}
-
-/// The canonical-dual QP of the diagnostics is solved by Clarabel at the first of these
-/// tolerances at which it reports `solved` (measured: at n = 20 on the balloons, 1e-12 ended
-/// `numerical_error`).
-const DIAG_QP_TOLS: [f64; 3] = [1e-12, 1e-10, 1e-9];
-
-/// Lemma 5.4 / 5.6 diagnostics of a converged run (Clarabel at the first tolerance of
-/// [`DIAG_QP_TOLS`] that solves the canonical-dual QP), and that tolerance.
-fn lemma_diagnostics(
-    mesh: &contactlab::mesh::Mesh,
-    energy: &contactlab::energy::TotalEnergy,
-    res: &contactlab::outer::RunResult,
-    eps: f64,
-    h: f64,
-) -> Result<(ConvergedDiagnostics, f64)> {
-    let mut last = None;
-    for tol in DIAG_QP_TOLS {
-        let st = contactlab_solvers::QpSettings {
-            eps_abs: tol,
-            eps_rel: tol,
-            ..Default::default()
-        };
-        let mut b = backend_from_name("clarabel", &st)?;
-        let d = converged_diagnostics(
-            mesh,
-            energy,
-            &res.x,
-            eps,
-            h,
-            &res.last_rows,
-            &res.multipliers,
-            b.as_mut(),
-            &DiagnosticSettings::for_eps(eps),
-        )?;
-        let solved = d.dual_qp_status == "solved";
-        last = Some((d, tol));
-        if solved {
-            break;
-        }
-    }
-    Ok(last.expect("DIAG_QP_TOLS is not empty"))
 }
 
 /// One row of `multipliers.csv`: an active pair at the fixed point.
@@ -528,6 +503,8 @@ fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Run(a)) => run_cmd(a),
+        Some(Command::Sweep(a)) => sweep::cmd_sweep(&a),
+        Some(Command::Plot(a)) => plot_cmd::cmd_plot(&a),
         Some(Command::Scaling(a)) => scaling_cmd::scaling_cmd(a),
         Some(Command::ScalingCase(a)) => scaling_cmd::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {

@@ -23,11 +23,13 @@ pub mod gas;
 pub mod gravity;
 pub mod membrane;
 pub mod neo_hookean;
+pub mod pressure;
 
 pub use gas::GasEnergy;
 pub use gravity::Gravity;
 pub use membrane::MembraneEnergy;
 pub use neo_hookean::NeoHookean2d;
+pub use pressure::PressureEnergy;
 
 use rayon::prelude::*;
 use std::ops::Range;

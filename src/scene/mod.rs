@@ -1,6 +1,7 @@
 //! Scenes: a mesh, an energy, ε and an initial admissible configuration.
 
 pub mod balloons;
+pub mod ring;
 
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;

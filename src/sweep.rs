@@ -1,0 +1,853 @@
+//! `contactlab sweep FILE.toml --out FILE.csv [--jobs N] [--shard K/N] [--resume]`: expands a
+//! sweep file into runs, executes them in parallel and writes one CSV row per run, flushed as
+//! each run ends (README, "Sweeps").
+//!
+//! Guarantees (tested in `tests/sweep.rs`):
+//! - a row is written and flushed as soon as its run ends, so an interrupted sweep loses no
+//!   finished row; `--resume` reads the CSV back, drops a torn last line, and skips every key
+//!   already present;
+//! - each run has a deterministic `key` built from everything that defines it; `--shard K/N`
+//!   keeps the runs whose key hashes (FNV-1a) to `K−1` mod `N`, so the shards of one sweep are
+//!   disjoint, cover it, and do not depend on the machine or on `--jobs`;
+//! - a run that fails (an error, or a panic) is a row with status `error`/`panic` and the
+//!   message in `error`, never an abort of the sweep;
+//! - a sweep that ends with every run present rewrites its CSV in the sweep file's order.
+
+use crate::case::{self, build_scene, f, CaseSettings, RUN_COLUMNS};
+use anyhow::{bail, Context, Result};
+use contactlab::diagnostics::h1_distance;
+use contactlab::outer::Pruning;
+use contactlab::presets::Accuracy;
+use contactlab_solvers::BACKEND_NAMES;
+use rayon::prelude::*;
+use serde::Deserialize;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Command-line arguments of `contactlab sweep`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct SweepArgs {
+    /// The sweep file (TOML; README, "Sweeps").
+    pub file: PathBuf,
+    /// The CSV to write. It must not exist unless --resume is given.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Runs executed at once (rayon threads; the timing columns are per run, so use 1 for
+    /// timing experiments on a loaded machine).
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Run only shard K of N (1-based), e.g. 2/4 in a SLURM array job; the shards' CSVs
+    /// concatenate (without their headers) into the table of the whole sweep.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Keep the rows already in --out and run only the missing ones.
+    #[arg(long)]
+    pub resume: bool,
+    /// Print the expanded runs (key per line) and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Stop the process abruptly after this many rows have been written (simulates a kill; used
+    /// by the resumability test).
+    #[arg(long, hide = true)]
+    pub stop_after: Option<usize>,
+    /// No progress lines.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("--shard {s:?}: expected K/N with 1 ≤ K ≤ N, e.g. 1/2");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let k: usize = k.trim().parse().map_err(|_| bad())?;
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if k == 0 || n == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// One or several values.
+#[derive(Deserialize, Clone, Debug)]
+#[serde(untagged)]
+pub enum OneOrMany<T> {
+    /// A single value.
+    One(T),
+    /// A list.
+    Many(Vec<T>),
+}
+
+impl<T: Clone> OneOrMany<T> {
+    fn to_vec(&self) -> Vec<T> {
+        match self {
+            OneOrMany::One(t) => vec![t.clone()],
+            OneOrMany::Many(v) => v.clone(),
+        }
+    }
+}
+
+/// An ε rule: `eps = c·h^p` (`c`, `p`; `p` defaults to 1), or a fixed value.
+#[derive(Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EpsRule {
+    /// Factor of `c·h^p`.
+    pub c: Option<f64>,
+    /// Power of `c·h^p` (default 1).
+    pub p: Option<f64>,
+    /// A fixed ε (exclusive with `c`, `p`).
+    pub fixed: Option<f64>,
+}
+
+impl EpsRule {
+    fn check(&self, scene: &str) -> Result<()> {
+        match (self.fixed, self.c) {
+            (Some(e), None) if self.p.is_none() => {
+                if !(e > 0.0 && e.is_finite()) {
+                    bail!("scene {scene}: eps fixed = {e} must be finite and > 0");
+                }
+            }
+            (None, Some(c)) => {
+                let p = self.p.unwrap_or(1.0);
+                if !(c > 0.0 && c.is_finite() && p.is_finite()) {
+                    bail!("scene {scene}: eps rule c = {c}, p = {p}: c must be > 0, both finite");
+                }
+            }
+            _ => bail!(
+                "scene {scene}: an eps rule is {{ c = .., p = .. }} or {{ fixed = .. }}, got {self:?}"
+            ),
+        }
+        Ok(())
+    }
+
+    /// ε at mesh size `h`.
+    pub fn eval(&self, h: f64) -> f64 {
+        match self.fixed {
+            Some(e) => e,
+            None => self.c.unwrap_or(1.0) * h.powf(self.p.unwrap_or(1.0)),
+        }
+    }
+
+    /// The rule as written in keys and the `eps_rule` column, e.g. `0.1*h^1` or `fixed:0.001`.
+    pub fn label(&self) -> String {
+        match self.fixed {
+            Some(e) => format!("fixed:{e:?}"),
+            None => format!("{:?}*h^{:?}", self.c.unwrap_or(1.0), self.p.unwrap_or(1.0)),
+        }
+    }
+}
+
+/// The reference run of the speed/accuracy trade-off (one per scene, n, ε and parameters).
+#[derive(Deserialize, Clone, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceSpec {
+    /// Backend (default clarabel).
+    #[serde(default = "default_ref_backend")]
+    pub backend: String,
+    /// Accuracy preset (default high).
+    #[serde(default = "default_ref_accuracy")]
+    pub accuracy: String,
+    /// tol_J of the reference (default 1e-14).
+    #[serde(default = "default_ref_tol_j")]
+    pub tol_j: f64,
+}
+
+fn default_ref_backend() -> String {
+    "clarabel".into()
+}
+fn default_ref_accuracy() -> String {
+    "high".into()
+}
+fn default_ref_tol_j() -> f64 {
+    1e-14
+}
+
+/// Settings shared by the scenes of a sweep file; a scene block may override each.
+#[derive(Deserialize, Clone, Debug, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Common {
+    /// Backends.
+    pub backends: Option<Vec<String>>,
+    /// Accuracy presets.
+    pub accuracy: Option<Vec<String>>,
+    /// Pruning mode (lazy, trust-region, all-pairs).
+    pub pruning: Option<String>,
+    /// Override of the presets' tol_J.
+    pub tol_j: Option<f64>,
+    /// Maximum outer iterations.
+    pub max_outer: Option<usize>,
+    /// Reference run for the error columns.
+    pub reference: Option<ReferenceSpec>,
+}
+
+/// A scene block: `[[scene]]`.
+#[derive(Deserialize, Clone, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneBlock {
+    /// Scene name.
+    pub name: String,
+    /// Mesh levels.
+    pub n: Vec<usize>,
+    /// ε rule(s); default `{ c = 0.1, p = 1 }` (h/10).
+    pub eps: Option<OneOrMany<EpsRule>>,
+    /// Numeric scene parameters.
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+    /// Overrides of the file's defaults.
+    #[serde(flatten)]
+    pub common: Common,
+}
+
+/// A sweep file.
+#[derive(Deserialize, Clone, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Name (documentation only; accepted so that a file can carry it).
+    #[allow(dead_code)]
+    pub name: Option<String>,
+    /// Free text (documentation only).
+    #[allow(dead_code)]
+    pub description: Option<String>,
+    /// Defaults for every scene block.
+    #[serde(default)]
+    pub defaults: Common,
+    /// Scene blocks.
+    pub scene: Vec<SceneBlock>,
+}
+
+/// One expanded run.
+#[derive(Clone, Debug)]
+pub struct RunSpec {
+    /// Deterministic key.
+    pub key: String,
+    /// Scene name.
+    pub scene: String,
+    /// Mesh level.
+    pub n: usize,
+    /// Mesh size.
+    pub h: f64,
+    /// ε rule label.
+    pub eps_rule: String,
+    /// ε.
+    pub eps: f64,
+    /// Scene parameters.
+    pub params: BTreeMap<String, f64>,
+    /// Case settings.
+    pub settings: CaseSettings,
+    /// Reference run, when the sweep asks for errors.
+    pub reference: Option<ReferenceSpec>,
+}
+
+impl RunSpec {
+    fn params_label(&self) -> String {
+        self.params
+            .iter()
+            .map(|(k, v)| format!("{k}={v:?}"))
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+
+    /// Key of the reference run of this run's group.
+    fn group_key(&self) -> String {
+        format!(
+            "{}|n={}|eps={}|{}",
+            self.scene,
+            self.n,
+            self.eps_rule,
+            self.params_label()
+        )
+    }
+}
+
+/// The case columns that precede [`RUN_COLUMNS`].
+pub const CASE_COLUMNS: [&str; 8] = [
+    "key", "scene", "n", "eps_rule", "params", "backend", "accuracy", "pruning",
+];
+
+/// The full header of a sweep CSV.
+pub fn header() -> Vec<&'static str> {
+    CASE_COLUMNS
+        .iter()
+        .chain(RUN_COLUMNS.iter())
+        .copied()
+        .collect()
+}
+
+/// Reads and validates a sweep file, and expands it into runs in file order (scene block, n,
+/// ε rule, backend, accuracy). Every name is checked before any run starts.
+pub fn load(path: &Path) -> Result<Vec<RunSpec>> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading sweep file {path:?}"))?;
+    let file: SweepFile =
+        toml::from_str(&text).with_context(|| format!("parsing sweep file {path:?}"))?;
+    expand(&file).with_context(|| format!("in sweep file {path:?}"))
+}
+
+/// Expands a parsed sweep file (see [`load`]).
+pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
+    if file.scene.is_empty() {
+        bail!("no [[scene]] block");
+    }
+    let mut runs = Vec::new();
+    let mut seen = BTreeSet::new();
+    for (bi, b) in file.scene.iter().enumerate() {
+        let pick = |o: &Option<Vec<String>>, d: &Option<Vec<String>>, dflt: &str| {
+            o.clone()
+                .or_else(|| d.clone())
+                .unwrap_or_else(|| vec![dflt.to_string()])
+        };
+        let backends = pick(&b.common.backends, &file.defaults.backends, "clarabel");
+        let accs = pick(&b.common.accuracy, &file.defaults.accuracy, "default");
+        let pruning_name = b
+            .common
+            .pruning
+            .clone()
+            .or_else(|| file.defaults.pruning.clone())
+            .unwrap_or_else(|| "lazy".into());
+        let pruning = Pruning::from_name(&pruning_name).with_context(|| {
+            format!(
+                "scene block {} ({}): pruning {pruning_name:?}: expected lazy, trust-region or all-pairs",
+                bi + 1,
+                b.name
+            )
+        })?;
+        let tol_j = b.common.tol_j.or(file.defaults.tol_j);
+        if let Some(t) = tol_j {
+            if !(t > 0.0 && t.is_finite()) {
+                bail!(
+                    "scene block {} ({}): tol_j = {t} must be finite and > 0",
+                    bi + 1,
+                    b.name
+                );
+            }
+        }
+        let max_outer = b
+            .common
+            .max_outer
+            .or(file.defaults.max_outer)
+            .unwrap_or(2000);
+        let reference = b
+            .common
+            .reference
+            .clone()
+            .or_else(|| file.defaults.reference.clone());
+        for be in &backends {
+            if !BACKEND_NAMES.contains(&be.as_str()) {
+                bail!(
+                    "scene block {} ({}): unknown backend {be:?} (available: {})",
+                    bi + 1,
+                    b.name,
+                    BACKEND_NAMES.join(", ")
+                );
+            }
+        }
+        let mut accuracy = Vec::new();
+        for a in &accs {
+            accuracy.push(Accuracy::from_name(a).with_context(|| {
+                format!(
+                    "scene block {} ({}): unknown accuracy {a:?} (expected low, default, high)",
+                    bi + 1,
+                    b.name
+                )
+            })?);
+        }
+        if let Some(r) = &reference {
+            if !BACKEND_NAMES.contains(&r.backend.as_str()) {
+                bail!(
+                    "scene block {}: reference backend {:?} unknown",
+                    bi + 1,
+                    r.backend
+                );
+            }
+            if Accuracy::from_name(&r.accuracy).is_none() {
+                bail!(
+                    "scene block {}: reference accuracy {:?} unknown",
+                    bi + 1,
+                    r.accuracy
+                );
+            }
+        }
+        let rules = b.eps.as_ref().map(|e| e.to_vec()).unwrap_or_else(|| {
+            vec![EpsRule {
+                c: Some(0.1),
+                p: Some(1.0),
+                fixed: None,
+            }]
+        });
+        for r in &rules {
+            r.check(&b.name)?;
+        }
+        if b.n.is_empty() {
+            bail!("scene block {} ({}): empty list n", bi + 1, b.name);
+        }
+        for &n in &b.n {
+            // building the scene checks its name and parameters and gives h
+            let h = build_scene(&b.name, n, None, &b.params)
+                .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
+                .h;
+            for rule in &rules {
+                for be in &backends {
+                    for acc in &accuracy {
+                        let settings = CaseSettings {
+                            backend: be.clone(),
+                            accuracy: *acc,
+                            pruning,
+                            tol_j,
+                            max_outer,
+                        };
+                        let mut spec = RunSpec {
+                            key: String::new(),
+                            scene: b.name.clone(),
+                            n,
+                            h,
+                            eps_rule: rule.label(),
+                            eps: rule.eval(h),
+                            params: b.params.clone(),
+                            settings,
+                            reference: reference.clone(),
+                        };
+                        spec.key = format!(
+                            "{}|{}|{}|{}|tolj={}|max={}",
+                            spec.group_key(),
+                            be,
+                            acc.as_str(),
+                            pruning.as_str(),
+                            tol_j.map_or("preset".into(), |t| format!("{t:?}")),
+                            max_outer
+                        );
+                        if !seen.insert(spec.key.clone()) {
+                            bail!("run {} appears twice in the sweep file", spec.key);
+                        }
+                        runs.push(spec);
+                    }
+                }
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// FNV-1a hash of a key (stable across platforms and Rust versions).
+pub fn key_hash(key: &str) -> u64 {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in key.as_bytes() {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    h
+}
+
+/// Whether run `key` belongs to shard `k` of `n` (1-based).
+pub fn in_shard(key: &str, shard: Option<(usize, usize)>) -> bool {
+    match shard {
+        None => true,
+        Some((k, n)) => key_hash(key) % n as u64 == (k - 1) as u64,
+    }
+}
+
+/// The reference of a group: energy and positions.
+struct Reference {
+    energy: f64,
+    x: Vec<f64>,
+    status: String,
+}
+
+/// Reads the rows already in `path` (for --resume): the keys, after dropping a torn last line
+/// (one without its newline, left by a kill during a write). Errors when the header differs.
+fn existing_keys(path: &Path) -> Result<BTreeSet<String>> {
+    let mut bytes = std::fs::read(path).with_context(|| format!("reading {path:?}"))?;
+    if let Some(end) = bytes.iter().rposition(|&b| b == b'\n') {
+        if end + 1 < bytes.len() {
+            eprintln!(
+                "sweep: {path:?}: dropping a torn last line ({} bytes, no newline)",
+                bytes.len() - end - 1
+            );
+            bytes.truncate(end + 1);
+            std::fs::write(path, &bytes).with_context(|| format!("truncating {path:?}"))?;
+        }
+    } else {
+        bytes.clear();
+        std::fs::write(path, &bytes)?;
+    }
+    let mut keys = BTreeSet::new();
+    if bytes.is_empty() {
+        return Ok(keys);
+    }
+    let mut rdr = csv::Reader::from_reader(bytes.as_slice());
+    let h: Vec<String> = rdr.headers()?.iter().map(|s| s.to_string()).collect();
+    let want = header();
+    if h != want {
+        bail!(
+            "{path:?}: its header is not this version's sweep header; move it away or write to \
+             another --out (first difference at column {})",
+            h.iter()
+                .zip(&want)
+                .position(|(a, b)| a != b)
+                .unwrap_or(h.len().min(want.len()))
+                + 1
+        );
+    }
+    for (i, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{path:?}: row {}", i + 2))?;
+        keys.insert(rec.get(0).unwrap_or_default().to_string());
+    }
+    Ok(keys)
+}
+
+/// Runs one spec into its row (never panics: a panic becomes a `panic` row).
+fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static str, String> {
+    let t = Instant::now();
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+        let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
+        let o = case::execute(&scene, &spec.settings, &mut |_, _| {})?;
+        let mut m = case::row_values(&scene, &o);
+        if let Some(r) = reference {
+            m.insert("reference_energy", f(r.energy));
+            if r.status == "converged" {
+                m.insert(
+                    "energy_error",
+                    f((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE)),
+                );
+                m.insert(
+                    "position_error_h1",
+                    f(h1_distance(&scene.mesh, &o.res.x, &r.x)),
+                );
+            }
+        }
+        let worst = o
+            .records
+            .iter()
+            .map(|r| r.min_distance)
+            .fold(f64::INFINITY, f64::min);
+        m.insert("max_violation", f((scene.eps - worst).max(0.0)));
+        Ok(m)
+    }));
+    let mut m = match out {
+        Ok(Ok(m)) => m,
+        Ok(Err(e)) => {
+            let mut m = BTreeMap::new();
+            m.insert("status", "error".to_string());
+            m.insert("error", format!("{e:#}"));
+            m
+        }
+        Err(p) => {
+            let msg = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "panic".into());
+            let mut m = BTreeMap::new();
+            m.insert("status", "panic".to_string());
+            m.insert("error", msg);
+            m
+        }
+    };
+    m.entry("h").or_insert_with(|| f(spec.h));
+    m.entry("eps").or_insert_with(|| f(spec.eps));
+    m.entry("wall_time_s")
+        .or_insert_with(|| f(t.elapsed().as_secs_f64()));
+    m
+}
+
+/// Solves the reference of a group.
+fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
+    let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
+    let cs = CaseSettings {
+        backend: r.backend.clone(),
+        accuracy: Accuracy::from_name(&r.accuracy).expect("checked in expand"),
+        pruning: spec.settings.pruning,
+        tol_j: Some(r.tol_j),
+        max_outer: spec.settings.max_outer.max(10_000),
+    };
+    let o = case::execute(&scene, &cs, &mut |_, _| {})?;
+    Ok(Reference {
+        energy: o.res.energy,
+        x: o.res.x,
+        status: o.res.status.as_str().to_string(),
+    })
+}
+
+fn csv_line(values: &[String]) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(values)?;
+    w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))
+}
+
+/// `contactlab sweep`.
+pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
+    if a.jobs == 0 {
+        bail!("--jobs 0: need at least one job");
+    }
+    let runs = load(&a.file)?;
+    if a.list {
+        for r in &runs {
+            if in_shard(&r.key, a.shard) {
+                println!("{}", r.key);
+            }
+        }
+        return Ok(());
+    }
+    let done = if a.out.exists() {
+        if !a.resume {
+            bail!(
+                "{:?} exists: pass --resume to keep its rows and run the missing ones, or remove it",
+                a.out
+            );
+        }
+        existing_keys(&a.out)?
+    } else {
+        BTreeSet::new()
+    };
+    if let Some(dir) = a.out.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {dir:?}"))?;
+        }
+    }
+    let mine: Vec<&RunSpec> = runs.iter().filter(|r| in_shard(&r.key, a.shard)).collect();
+    let todo: Vec<&RunSpec> = mine
+        .iter()
+        .copied()
+        .filter(|r| !done.contains(&r.key))
+        .collect();
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&a.out)
+        .with_context(|| format!("opening {:?}", a.out))?;
+    if file.metadata()?.len() == 0 {
+        let hdr: Vec<String> = header().iter().map(|s| s.to_string()).collect();
+        file.write_all(&csv_line(&hdr)?)?;
+        file.flush()?;
+    }
+    let name = a.file.display().to_string();
+    if !a.quiet {
+        eprintln!(
+            "sweep {name}: {} runs{}, {} already in {:?}, {} to run with {} job(s)",
+            mine.len(),
+            a.shard
+                .map(|(k, n)| format!(" in shard {k}/{n}"))
+                .unwrap_or_default(),
+            mine.len() - todo.len(),
+            a.out,
+            todo.len(),
+            a.jobs
+        );
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.jobs)
+        .build()
+        .context("building the thread pool")?;
+    // references: one per group with pending runs, solved first (in parallel)
+    let mut groups: BTreeMap<String, &RunSpec> = BTreeMap::new();
+    for r in &todo {
+        if r.reference.is_some() {
+            groups.entry(r.group_key()).or_insert(r);
+        }
+    }
+    let t0 = Instant::now();
+    let refs: HashMap<String, Reference> = pool.install(|| {
+        groups
+            .par_iter()
+            .filter_map(|(g, r)| {
+                let spec = r.reference.as_ref().expect("filtered");
+                let t = Instant::now();
+                match solve_reference(r, spec) {
+                    Ok(x) => {
+                        if !a.quiet {
+                            eprintln!(
+                                "sweep: reference {g}: {} J={:.12e} ({:.2}s)",
+                                x.status,
+                                x.energy,
+                                t.elapsed().as_secs_f64()
+                            );
+                        }
+                        Some((g.clone(), x))
+                    }
+                    Err(e) => {
+                        eprintln!("sweep: reference {g} failed: {e:#}; error columns left empty");
+                        None
+                    }
+                }
+            })
+            .collect()
+    });
+    let writer = Mutex::new((file, 0usize));
+    let total = todo.len();
+    let result: Result<()> = pool.install(|| {
+        todo.par_iter().try_for_each(|r| -> Result<()> {
+            let mut m = run_one(r, refs.get(&r.group_key()));
+            m.insert("key", r.key.clone());
+            m.insert("scene", r.scene.clone());
+            m.insert("n", r.n.to_string());
+            m.insert("eps_rule", r.eps_rule.clone());
+            m.insert("params", r.params_label());
+            m.insert("backend", r.settings.backend.clone());
+            m.insert("accuracy", r.settings.accuracy.as_str().to_string());
+            m.insert("pruning", r.settings.pruning.as_str().to_string());
+            let values: Vec<String> = header()
+                .iter()
+                .map(|c| m.get(c).cloned().unwrap_or_default())
+                .collect();
+            let line = csv_line(&values)?;
+            let mut g = writer.lock().unwrap_or_else(|e| e.into_inner());
+            g.0.write_all(&line)?;
+            g.0.flush()?;
+            g.1 += 1;
+            if !a.quiet {
+                eprintln!(
+                    "[{}/{} {:.0}s] {} {} {} s",
+                    g.1,
+                    total,
+                    t0.elapsed().as_secs_f64(),
+                    r.key,
+                    m.get("status").map_or("", |s| s.as_str()),
+                    m.get("wall_time_s").map_or("", |s| s.as_str()),
+                );
+            }
+            if a.stop_after == Some(g.1) {
+                g.0.sync_all()?;
+                std::process::exit(3);
+            }
+            Ok(())
+        })
+    });
+    result?;
+    drop(writer);
+    // complete: rewrite in the sweep file's order
+    let present = existing_keys(&a.out)?;
+    if mine.iter().all(|r| present.contains(&r.key)) {
+        sort_csv(&a.out, &mine)?;
+    }
+    if !a.quiet {
+        eprintln!("sweep {name}: done, {:?}", a.out);
+    }
+    Ok(())
+}
+
+/// Rewrites `path` with its rows in the order of `order` (atomic: a temporary file renamed).
+fn sort_csv(path: &Path, order: &[&RunSpec]) -> Result<()> {
+    let rank: HashMap<&str, usize> = order
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (r.key.as_str(), i))
+        .collect();
+    let mut rdr = csv::Reader::from_path(path)?;
+    let hdr = rdr.headers()?.clone();
+    let mut rows: Vec<csv::StringRecord> = rdr.records().collect::<Result<_, _>>()?;
+    rows.sort_by_key(|r| {
+        rank.get(r.get(0).unwrap_or(""))
+            .copied()
+            .unwrap_or(usize::MAX)
+    });
+    let tmp = path.with_extension("csv.tmp");
+    {
+        let mut w = csv::Writer::from_path(&tmp)?;
+        w.write_record(&hdr)?;
+        for r in &rows {
+            w.write_record(r)?;
+        }
+        w.flush()?;
+    }
+    std::fs::rename(&tmp, path)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Vec<RunSpec>> {
+        expand(&toml::from_str(s)?)
+    }
+
+    #[test]
+    fn sweep_expands_in_order_with_unique_keys() {
+        let runs = parse(
+            r#"
+            [defaults]
+            backends = ["clarabel", "uzawa"]
+            [[scene]]
+            name = "balloons"
+            n = [20, 40]
+            eps = [{ c = 0.1 }, { fixed = 0.001 }]
+            "#,
+        )
+        .unwrap();
+        assert_eq!(runs.len(), 2 * 2 * 2);
+        assert_eq!(runs[0].n, 20);
+        assert_eq!(runs[0].eps_rule, "0.1*h^1.0");
+        assert!((runs[0].eps - 0.1 * runs[0].h).abs() < 1e-15);
+        assert_eq!(runs[2].eps_rule, "fixed:0.001");
+        assert_eq!(runs[2].eps, 0.001);
+        assert_eq!(runs[1].settings.backend, "uzawa");
+        assert_eq!(runs[4].n, 40);
+        let keys: BTreeSet<_> = runs.iter().map(|r| r.key.clone()).collect();
+        assert_eq!(keys.len(), runs.len());
+    }
+
+    #[test]
+    fn sweep_bad_files_name_the_problem() {
+        let e = |s: &str| format!("{:#}", parse(s).expect_err("should fail"));
+        assert!(e("[[scene]]\nname = \"nope\"\nn = [20]").contains("unknown scene \"nope\""));
+        assert!(
+            e("[[scene]]\nname = \"balloons\"\nn = [20]\nbackends = [\"gurobi\"]")
+                .contains("unknown backend \"gurobi\"")
+        );
+        assert!(
+            e("[[scene]]\nname = \"balloons\"\nn = [20]\naccuracy = [\"max\"]")
+                .contains("unknown accuracy \"max\"")
+        );
+        assert!(
+            e("[[scene]]\nname = \"balloons\"\nn = [20]\nparams = { zeta = 1.0 }")
+                .contains("unknown parameter \"zeta\"")
+        );
+        assert!(
+            e("[[scene]]\nname = \"balloons\"\nn = [20]\neps = { c = -1.0 }")
+                .contains("c must be > 0")
+        );
+        assert!(
+            e("[[scene]]\nname = \"balloons\"\nn = [20]\neps = { fixed = 1.0, c = 1.0 }")
+                .contains("eps rule")
+        );
+        assert!(
+            toml::from_str::<SweepFile>("[[scene]]\nname = \"balloons\"\nn = [20]\nbogus = 1")
+                .err()
+                .unwrap()
+                .to_string()
+                .contains("bogus")
+        );
+        assert!(e("[[scene]]\nname = \"balloons\"\nn = [20, 20]").contains("twice"));
+    }
+
+    #[test]
+    fn sweep_shards_partition_the_runs() {
+        let runs = parse(
+            "[defaults]\nbackends = [\"clarabel\", \"osqp\", \"uzawa\"]\naccuracy = [\"low\", \"default\", \"high\"]\n[[scene]]\nname = \"balloons\"\nn = [20, 40, 80]",
+        )
+        .unwrap();
+        for n in 1..=4 {
+            let mut count = 0;
+            for r in &runs {
+                let owners = (1..=n).filter(|&k| in_shard(&r.key, Some((k, n)))).count();
+                assert_eq!(owners, 1, "{} in {owners} of {n} shards", r.key);
+                count += 1;
+            }
+            assert_eq!(count, runs.len());
+        }
+        // both shards of 2 are used by 27 runs
+        let s1 = runs
+            .iter()
+            .filter(|r| in_shard(&r.key, Some((1, 2))))
+            .count();
+        assert!(
+            s1 > 0 && s1 < runs.len(),
+            "shard 1/2 has {s1} of {}",
+            runs.len()
+        );
+        assert!(
+            parse_shard("0/2").is_err() && parse_shard("3/2").is_err() && parse_shard("x").is_err()
+        );
+        assert_eq!(parse_shard("2/3"), Ok((2, 3)));
+    }
+}

@@ -1,0 +1,182 @@
+//! `contactlab sweep` end to end, through the binary: an interrupted sweep resumed gives the
+//! rows of an uninterrupted one; shards 1/2 and 2/2 together give the rows of the unsharded
+//! sweep; a failing run is a row, not an abort; an existing CSV is not overwritten.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SWEEP: &str = r#"
+name = "test"
+[defaults]
+backends = ["clarabel", "uzawa"]
+accuracy = ["low", "default"]
+reference = { }
+[[scene]]
+name = "balloons"
+n = [12, 20]
+[[scene]]
+name = "ring"
+n = [20]
+# ε = 0.5 is larger than the gap of the initial ellipse: every run of this block fails
+eps = [{ c = 0.1 }, { fixed = 0.5 }]
+backends = ["clarabel"]
+"#;
+
+/// Columns that differ between two honest runs of the same case (timings).
+fn is_timing(col: &str) -> bool {
+    col == "wall_time_s" || col.starts_with("t_")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("s.toml"), SWEEP).unwrap();
+    d
+}
+
+fn sweep(d: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .arg("sweep")
+        .arg(d.join("s.toml"))
+        .args(["--quiet"])
+        .args(args)
+        .current_dir(d)
+        .output()
+        .unwrap()
+}
+
+/// Rows by key, timing columns removed; panics on a duplicate key.
+fn rows(path: &Path) -> BTreeMap<String, Vec<(String, String)>> {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let hdr: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    let mut m = BTreeMap::new();
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let v: Vec<(String, String)> = hdr
+            .iter()
+            .zip(rec.iter())
+            .filter(|(c, _)| !is_timing(c))
+            .map(|(c, x)| (c.clone(), x.to_string()))
+            .collect();
+        let key = rec.get(0).unwrap().to_string();
+        assert!(m.insert(key.clone(), v).is_none(), "duplicate row {key}");
+    }
+    m
+}
+
+fn full(d: &Path) -> BTreeMap<String, Vec<(String, String)>> {
+    let out = sweep(d, &["--out", "full.csv", "--jobs", "2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    rows(&d.join("full.csv"))
+}
+
+#[test]
+fn sweep_rows_statuses_and_errors() {
+    let d = dir("sweep_rows");
+    let a = full(&d);
+    // 2 n × 2 backends × 2 presets for the balloons, 2 ε × 2 presets for the ring
+    assert_eq!(a.len(), 8 + 4);
+    let get =
+        |row: &Vec<(String, String)>, c: &str| row.iter().find(|(k, _)| k == c).unwrap().1.clone();
+    let mut failed = 0;
+    for (k, row) in &a {
+        let status = get(row, "status");
+        if k.contains("fixed:0.5") {
+            failed += 1;
+            assert_eq!(status, "error", "{k}");
+            assert!(
+                get(row, "error").contains("not admissible"),
+                "{k}: {:?}",
+                get(row, "error")
+            );
+        } else {
+            assert_eq!(status, "converged", "{k}: {}", get(row, "error"));
+            let pos: f64 = get(row, "position_error_h1").parse().unwrap();
+            let ee: f64 = get(row, "energy_error").parse().unwrap();
+            assert!(pos.is_finite() && pos >= 0.0 && ee >= 0.0, "{k}");
+            assert_eq!(get(row, "max_violation"), "0.0", "{k}");
+            assert!(get(row, "residual_hm1").parse::<f64>().unwrap() >= 0.0);
+        }
+    }
+    assert_eq!(failed, 2);
+    // a complete sweep is written in the file's order: balloons n = 12 first
+    let first = csv::Reader::from_path(d.join("full.csv"))
+        .unwrap()
+        .records()
+        .next()
+        .unwrap()
+        .unwrap();
+    assert!(
+        first.get(0).unwrap().starts_with("balloons|n=12|"),
+        "{first:?}"
+    );
+    // an existing CSV is never overwritten without --resume
+    let out = sweep(&d, &["--out", "full.csv"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--resume"));
+    // resuming a complete sweep runs nothing and changes nothing
+    let before = std::fs::read(d.join("full.csv")).unwrap();
+    let out = sweep(&d, &["--out", "full.csv", "--resume"]);
+    assert!(out.status.success());
+    assert_eq!(std::fs::read(d.join("full.csv")).unwrap(), before);
+}
+
+#[test]
+fn sweep_killed_and_resumed_equals_uninterrupted() {
+    let d = dir("sweep_resume");
+    let a = full(&d);
+    // killed (exit without cleanup) after 5 rows
+    let out = sweep(
+        &d,
+        &["--out", "part.csv", "--jobs", "2", "--stop-after", "5"],
+    );
+    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(rows(&d.join("part.csv")).len(), 5);
+    // and a torn line, as a kill in the middle of a write leaves
+    let mut bytes = std::fs::read(d.join("part.csv")).unwrap();
+    bytes.extend_from_slice(b"balloons|n=20|eps=0.1*h^1.0||uzawa|low|la");
+    std::fs::write(d.join("part.csv"), bytes).unwrap();
+    let out = sweep(&d, &["--out", "part.csv", "--resume"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("torn last line"));
+    let b = rows(&d.join("part.csv"));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    assert_eq!(a, b, "resumed rows differ from the uninterrupted sweep");
+}
+
+#[test]
+fn sweep_shards_concatenate_to_the_whole() {
+    let d = dir("sweep_shards");
+    let a = full(&d);
+    for k in ["1/2", "2/2"] {
+        let out = sweep(&d, &["--out", &format!("s{}.csv", &k[..1]), "--shard", k]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let (s1, s2) = (rows(&d.join("s1.csv")), rows(&d.join("s2.csv")));
+    assert!(
+        !s1.is_empty() && !s2.is_empty(),
+        "a shard is empty: {} / {}",
+        s1.len(),
+        s2.len()
+    );
+    // concatenated without the second header, as a user would with tail -n +2
+    let mut cat = std::fs::read(d.join("s1.csv")).unwrap();
+    let s2_text = std::fs::read_to_string(d.join("s2.csv")).unwrap();
+    cat.extend_from_slice(s2_text.split_once('\n').unwrap().1.as_bytes());
+    std::fs::write(d.join("cat.csv"), cat).unwrap();
+    assert_eq!(rows(&d.join("cat.csv")), a);
+}
