@@ -82,6 +82,9 @@ pub struct CaseSettings {
     pub tol_j: Option<f64>,
     /// Maximum outer iterations.
     pub max_outer: usize,
+    /// Inner (Newton-type) steps per T(ψ) at most (`None`: the default, 50); 1 gives one QP
+    /// per outer step.
+    pub max_inner: Option<usize>,
 }
 
 /// A finished case.
@@ -96,6 +99,8 @@ pub struct CaseOutcome {
     pub qp: QpSettings,
     /// tol_J used.
     pub tol_j: f64,
+    /// Inner steps per T(ψ) at most, as used.
+    pub max_inner: usize,
     /// Seconds in the diagnostics.
     pub t_diagnostics_s: f64,
 }
@@ -158,12 +163,15 @@ pub fn execute_with(
 ) -> Result<CaseOutcome> {
     let qp = cs.accuracy.qp_settings(&cs.backend);
     let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
-    let settings = OuterSettings {
+    let mut settings = OuterSettings {
         tol_j,
         max_outer: cs.max_outer,
         pruning: cs.pruning,
         ..Default::default()
     };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
     let mut records = Vec::new();
     let res = run(
         &scene.mesh,
@@ -189,18 +197,20 @@ pub fn execute_with(
         diagnostics,
         qp,
         tol_j,
+        max_inner: settings.inner.max_inner,
         t_diagnostics_s: t.elapsed().as_secs_f64(),
     })
 }
 
 /// The per-run columns of a sweep row (after the case's own columns), as documented in the
 /// README ("Sweeps").
-pub const RUN_COLUMNS: [&str; 32] = [
+pub const RUN_COLUMNS: [&str; 33] = [
     "dim",
     "h",
     "eps",
     "qp_tol",
     "tol_j",
+    "max_inner",
     "status",
     "outer_iterations",
     "inner_iterations",
@@ -249,6 +259,7 @@ pub fn row_values(scene: &Scene, o: &CaseOutcome) -> BTreeMap<&'static str, Stri
     m.insert("eps", f(scene.eps));
     m.insert("qp_tol", f(o.qp.eps_abs));
     m.insert("tol_j", f(o.tol_j));
+    m.insert("max_inner", o.max_inner.to_string());
     m.insert("status", r.status.as_str().to_string());
     m.insert("outer_iterations", r.outer_iterations.to_string());
     m.insert("inner_iterations", r.inner_iterations.to_string());

@@ -29,6 +29,7 @@ struct Cli {
 }
 
 mod case;
+mod export_cmd;
 mod plot_cmd;
 mod scaling_cmd;
 mod sweep;
@@ -42,6 +43,8 @@ enum Command {
     Scaling(scaling_cmd::ScalingArgs),
     /// Run a sweep file: one CSV row per run, flushed as each ends (README, "Sweeps").
     Sweep(sweep::SweepArgs),
+    /// Run a scene and write every sub-problem QP as a QPS file (README, "QP export").
+    ExportQp(export_cmd::ExportArgs),
     /// Log-log SVG of sweep CSV columns with fitted slopes (README, "Plots").
     Plot(plot_cmd::PlotArgs),
     /// One case of the scaling experiment (run by `scaling` in a child process).
@@ -505,6 +508,7 @@ fn main() {
         Some(Command::Run(a)) => run_cmd(a),
         Some(Command::Sweep(a)) => sweep::cmd_sweep(&a),
         Some(Command::Plot(a)) => plot_cmd::cmd_plot(&a),
+        Some(Command::ExportQp(a)) => export_cmd::cmd_export(&a),
         Some(Command::Scaling(a)) => scaling_cmd::scaling_cmd(a),
         Some(Command::ScalingCase(a)) => scaling_cmd::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {

@@ -177,6 +177,8 @@ pub struct Common {
     pub tol_j: Option<f64>,
     /// Maximum outer iterations.
     pub max_outer: Option<usize>,
+    /// Inner steps per T(ψ) at most (default 50; 1 = one QP per outer step).
+    pub max_inner: Option<usize>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -327,6 +329,14 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             .max_outer
             .or(file.defaults.max_outer)
             .unwrap_or(2000);
+        let max_inner = b.common.max_inner.or(file.defaults.max_inner);
+        if max_outer == 0 || max_inner == Some(0) {
+            bail!(
+                "scene block {} ({}): max_outer and max_inner must be ≥ 1",
+                bi + 1,
+                b.name
+            );
+        }
         let reference = b
             .common
             .reference
@@ -395,6 +405,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                             pruning,
                             tol_j,
                             max_outer,
+                            max_inner,
                         };
                         let mut spec = RunSpec {
                             key: String::new(),
@@ -408,13 +419,15 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                             reference: reference.clone(),
                         };
                         spec.key = format!(
-                            "{}|{}|{}|{}|tolj={}|max={}",
+                            "{}|{}|{}|{}|tolj={}|max={}{}",
                             spec.group_key(),
                             be,
                             acc.as_str(),
                             pruning.as_str(),
                             tol_j.map_or("preset".into(), |t| format!("{t:?}")),
-                            max_outer
+                            max_outer,
+                            // only when set, so that keys of sweeps without it stay as they were
+                            max_inner.map_or(String::new(), |k| format!("|inner={k}"))
                         );
                         if !seen.insert(spec.key.clone()) {
                             bail!("run {} appears twice in the sweep file", spec.key);
@@ -559,6 +572,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         pruning: spec.settings.pruning,
         tol_j: Some(r.tol_j),
         max_outer: spec.settings.max_outer.max(10_000),
+        max_inner: None,
     };
     let o = case::execute(&scene, &cs, &mut |_, _| {})?;
     Ok(Reference {
@@ -784,6 +798,13 @@ mod tests {
         assert_eq!(runs[4].n, 40);
         let keys: BTreeSet<_> = runs.iter().map(|r| r.key.clone()).collect();
         assert_eq!(keys.len(), runs.len());
+        assert!(runs
+            .iter()
+            .all(|r| r.settings.max_inner.is_none() && !r.key.contains("inner=")));
+        // max_inner enters the settings and the key only when given
+        let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\nmax_inner = 1").unwrap();
+        assert_eq!(runs[0].settings.max_inner, Some(1));
+        assert!(runs[0].key.ends_with("|inner=1"), "{}", runs[0].key);
     }
 
     #[test]

@@ -24,6 +24,7 @@ pub mod backend;
 pub mod clarabel_backend;
 pub mod osqp_backend;
 pub mod qp;
+pub mod qps;
 pub mod uzawa;
 
 pub use backend::{
@@ -31,3 +32,4 @@ pub use backend::{
     WarmStart, BACKEND_NAMES,
 };
 pub use qp::{CscMatrix, Qp};
+pub use qps::{read_qps, read_qps_file, write_qps, write_qps_file, QpsError};
