@@ -4,8 +4,8 @@
 # on two balloons scenes with lazy rows. Each case's error is measured against a reference run
 # with tighter settings (tol_j = 1e-12, the default 50 inner steps and QP tolerance).
 # One run directory per case under runs/tradeoff/ (skipped when its summary.json exists),
-# then results/tradeoff.csv.
-# Usage: bash experiments/tradeoff.sh [BACKEND]   (default clarabel; rows of other backends
+# then results/tradeoff_knobs.csv.
+# Usage: bash experiments/tradeoff_knobs.sh [BACKEND]   (default clarabel; rows of other backends
 # already in the CSV are kept)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,7 +59,7 @@ for sc in scenes:
             "rel_energy_error": "" if jref is None else f"{(j - jref) / abs(jref):.3e}",
             "min_distance_over_eps": s["min_distance"] / s["eps"],
         })
-path = "results/tradeoff.csv"
+path = "results/tradeoff_knobs.csv"
 old = []
 if os.path.exists(path):
     old = [r for r in csv.DictReader(open(path)) if r["backend"] != backend]

@@ -1,6 +1,6 @@
 //! The `contactlab` command line.
 //!
-//! `contactlab run [balloons] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
+//! `contactlab run [balloons|ring] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
 //! outer loop on a scene and writes a run directory (see README).
 
 use anyhow::{bail, Context, Result};
@@ -13,6 +13,7 @@ use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
 use contactlab::presets::Accuracy;
 use contactlab::scene::balloons::{self, classify_state, BalloonsParams};
+use contactlab::scene::ring::{self, RingParams};
 use contactlab_solvers::backend_from_name;
 use std::io::Write;
 use std::path::PathBuf;
@@ -54,15 +55,18 @@ enum Command {
 
 #[derive(clap::Args, Clone)]
 struct RunArgs {
-    /// Scene name (only `balloons` so far).
+    /// Scene name: balloons or ring.
     #[arg(default_value = "balloons")]
     scene: String,
     /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
     #[arg(long, default_value = "clarabel")]
     backend: String,
-    /// Elements per membrane.
+    /// Elements per membrane (balloons) or edges of the ring.
     #[arg(long, default_value_t = 40)]
     n: usize,
+    /// A ring parameter NAME=VALUE (p, aspect, half_span); repeatable.
+    #[arg(long = "param")]
+    params: Vec<String>,
     /// Gas constant C.
     #[arg(long, default_value_t = 50.0)]
     c: f64,
@@ -170,36 +174,68 @@ struct Summary {
     state: String,
     energy_monotone: bool,
     all_iterates_admissible: bool,
-    params: BalloonsParams,
+    params: serde_json::Value,
     settings: OuterSettings,
     qp_tol: f64,
     accuracy: &'static str,
 }
 
 fn run_cmd(a: RunArgs) -> Result<()> {
-    if a.scene != "balloons" {
-        bail!("unknown scene {:?} (available: balloons)", a.scene);
-    }
-    let mut params = BalloonsParams {
-        n: a.n,
-        c: a.c,
-        mu: a.mu,
-        eps: a.eps,
-        ..Default::default()
-    };
-    for (i, v) in &a.perturb {
-        params.perturb[*i] = *v;
-    }
-    if let Some(hs) = &a.heights {
-        if hs.len() != 4 {
-            bail!(
-                "--heights takes 4 values (one per balloon), got {}",
-                hs.len()
-            );
+    let (scene, params) = match a.scene.as_str() {
+        "balloons" => {
+            let mut params = BalloonsParams {
+                n: a.n,
+                c: a.c,
+                mu: a.mu,
+                eps: a.eps,
+                ..Default::default()
+            };
+            for (i, v) in &a.perturb {
+                params.perturb[*i] = *v;
+            }
+            if let Some(hs) = &a.heights {
+                if hs.len() != 4 {
+                    bail!(
+                        "--heights takes 4 values (one per balloon), got {}",
+                        hs.len()
+                    );
+                }
+                params.heights.copy_from_slice(hs);
+            }
+            if !a.params.is_empty() {
+                bail!("--param is for the ring scene; the balloons take --c, --mu, --perturb, --heights");
+            }
+            (balloons::build(&params)?, serde_json::to_value(&params)?)
         }
-        params.heights.copy_from_slice(hs);
-    }
-    let scene = balloons::build(&params)?;
+        "ring" => {
+            if !a.perturb.is_empty() || a.heights.is_some() {
+                bail!("--perturb and --heights are balloons options; the ring takes --mu and --param p=..,aspect=..,half_span=..");
+            }
+            let mut params = RingParams {
+                n: a.n,
+                mu: a.mu,
+                eps: a.eps,
+                ..Default::default()
+            };
+            for kv in &a.params {
+                let (k, v) = kv
+                    .split_once('=')
+                    .with_context(|| format!("--param {kv:?}: expected NAME=VALUE"))?;
+                let v: f64 = v
+                    .trim()
+                    .parse()
+                    .with_context(|| format!("--param {kv:?}: {v:?} is not a number"))?;
+                match k.trim() {
+                    "p" => params.p = v,
+                    "aspect" => params.aspect = v,
+                    "half_span" => params.half_span = v,
+                    other => bail!("--param {other:?}: the ring knows p, aspect, half_span (and --mu, --eps, --n)"),
+                }
+            }
+            (ring::build(&params)?, serde_json::to_value(&params)?)
+        }
+        other => bail!("unknown scene {other:?} (available: balloons, ring)"),
+    };
     let mut qps = a.accuracy.qp_settings(&a.backend);
     if let Some(t) = a.qp_tol {
         qps.eps_abs = t;
@@ -334,7 +370,11 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         .copied()
         .filter(|&(i, j)| i < 4 && j < 4)
         .collect();
-    let state = classify_state(&balloon_pairs);
+    let state = if scene.name == "ring" {
+        ring::classify_state(mesh, &res.x, scene.eps)
+    } else {
+        classify_state(&balloon_pairs)
+    };
     // Picture: initial, an intermediate and the final shapes, J beside them.
     let mid = snapshots.len() / 2;
     let shapes = vec![
@@ -358,8 +398,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         },
     ];
     let title = format!(
-        "balloons n={} backend={} state={} J={:.10e}",
-        params.n, a.backend, state, res.energy
+        "{} n={} backend={} state={} J={:.10e}",
+        scene.name, a.n, a.backend, state, res.energy
     );
     write_svg(
         &out.join("shapes.svg"),
@@ -382,7 +422,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             .map(|(d, tol)| DiagSummary::new(d, *tol)),
         scene: scene.name.clone(),
         dim: 2,
-        n: params.n,
+        n: a.n,
         h: scene.h,
         eps: scene.eps,
         backend: a.backend.clone(),

@@ -33,6 +33,9 @@ pub struct PlotArgs {
     /// and a smaller y): the speed/accuracy front.
     #[arg(long)]
     pub pareto: bool,
+    /// No fitted slope in the legend (for fronts and scatter, where a power law means nothing).
+    #[arg(long)]
+    pub no_fit: bool,
     /// Plot every row, not only the converged ones.
     #[arg(long)]
     pub all_statuses: bool,
@@ -182,7 +185,7 @@ pub fn cmd_plot(a: &PlotArgs) -> Result<()> {
         if a.pareto {
             pts = pareto(pts);
         }
-        let slope = loglog_slope(&pts);
+        let slope = if a.no_fit { None } else { loglog_slope(&pts) };
         let name = if ys.len() > 1 || g.is_empty() {
             format!("{} {}", g, a.y[k]).trim().to_string()
         } else {

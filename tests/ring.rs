@@ -130,6 +130,40 @@ fn ring_self_contact_three_backends_agree() {
     }
 }
 
+#[test]
+fn run_command_on_the_ring_writes_a_run_directory() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("run_ring");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run", "ring", "--n", "20", "--quiet", "--param", "p=0.5", "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["scene"], "ring");
+    assert_eq!(s["status"], "converged");
+    assert_eq!(s["state"], "self_contact");
+    assert_eq!(s["params"]["p"], 0.5);
+    assert!(s["diagnostics"]["ratio"].as_f64().unwrap() <= 1.0);
+    assert!(dir.join("multipliers.csv").exists() && dir.join("history.csv").exists());
+    // a balloons option on the ring is refused, naming it
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(["run", "ring", "--heights", "1,1,1,1", "--out"])
+        .arg(dir.join("bad"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--heights"));
+}
+
 /// The exploration that chose the two pins (run with `--ignored --nocapture`): the one-pin
 /// ring crumples to a short slack state instead of a tensioned one.
 #[test]

@@ -9,7 +9,7 @@ use std::process::Command;
 const SWEEP: &str = r#"
 name = "test"
 [defaults]
-backends = ["clarabel", "uzawa"]
+backends = ["clarabel", "osqp", "uzawa"]
 accuracy = ["low", "default"]
 reference = { }
 [[scene]]
@@ -80,8 +80,8 @@ fn full(d: &Path) -> BTreeMap<String, Vec<(String, String)>> {
 fn sweep_rows_statuses_and_errors() {
     let d = dir("sweep_rows");
     let a = full(&d);
-    // 2 n × 2 backends × 2 presets for the balloons, 2 ε × 2 presets for the ring
-    assert_eq!(a.len(), 8 + 4);
+    // 2 n × 3 backends × 2 presets for the balloons, 2 ε × 2 presets for the ring
+    assert_eq!(a.len(), 12 + 4);
     let get =
         |row: &Vec<(String, String)>, c: &str| row.iter().find(|(k, _)| k == c).unwrap().1.clone();
     let mut failed = 0;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The sweeps of issue 4 and their plots, in order. Each sweep resumes (--resume), so a rerun
+# after an interruption runs only the missing rows. Timing sweeps use --jobs 1.
+# Usage: bash experiments/run_all.sh [NAME ...]   (default: all five)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/ensure-cmake.sh
+[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
+bin=${CONTACTLAB_BIN:-target/release/contactlab}
+names=("$@")
+[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling)
+for name in "${names[@]}"; do
+  case $name in
+    lemma56|iterations) jobs=2 ;;
+    *) jobs=1 ;;
+  esac
+  out=results/$name.csv
+  [ "$name" != scaling ] || out=results/scaling_sweep.csv
+  "$bin" sweep "experiments/$name.toml" --out "$out" --jobs $jobs --resume
+  case $name in
+    lemma56)
+      "$bin" plot results/lemma56.csv --x h --y residual_hm1,bound --group scene \
+        --where accuracy=high --title "Lemma 5.6: ||R||_H-1 and B against h (Clarabel, high)" \
+        --out results/lemma56.svg
+      "$bin" plot results/lemma56.csv --x h --y residual_hm1,bound --group scene \
+        --where accuracy=default --title "Lemma 5.6: ||R||_H-1 and B against h (Clarabel, default)" \
+        --out results/lemma56_default.svg ;;
+    iterations)
+      for s in balloons ring; do
+        for k in 50 1; do
+          "$bin" plot results/iterations.csv --x "1/max(h,eps)" --y outer_iterations \
+            --group eps_rule --where scene=$s --where max_inner=$k \
+            --title "$s, max_inner=$k: outer iterations against max(h, eps)^-1" \
+            --out results/iterations_${s}_inner$k.svg
+        done
+        "$bin" plot results/iterations.csv --x "1/max(h,eps)" --y inner_iterations \
+          --group eps_rule --where scene=$s --where max_inner=50 \
+          --title "$s, max_inner=50: inner (Newton-type) steps against max(h, eps)^-1" \
+          --out results/iterations_inner_$s.svg
+      done ;;
+    backends)
+      for s in balloons ring; do
+        "$bin" plot results/backends.csv --x n --y wall_time_s --group backend \
+          --where scene=$s --where accuracy=default \
+          --title "$s: wall time per backend (default preset)" --out results/backends_$s.svg
+      done ;;
+    tradeoff)
+      "$bin" plot results/tradeoff.csv --x wall_time_s --y energy_error --group backend --pareto \
+        --no-fit --where scene=balloons --where n=80 --title "balloons n=80: energy error against time" \
+        --out results/tradeoff.svg
+      "$bin" plot results/tradeoff.csv --x wall_time_s --y position_error_h1 --group backend \
+        --pareto --no-fit --where scene=balloons --where n=80 \
+        --title "balloons n=80: H1 position error against time" --out results/tradeoff_h1.svg ;;
+    scaling)
+      "$bin" plot results/scaling_sweep.csv --x n --y wall_time_s --group pruning \
+        --title "balloons: wall time of the whole solve against n" --out results/scaling_sweep.svg ;;
+  esac
+done
