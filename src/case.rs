@@ -69,6 +69,21 @@ pub fn build_scene(
     }
 }
 
+/// Parses `NAME=VALUE` scene parameters (`--param`, repeatable); the error names the argument.
+pub fn parse_params(args: &[String]) -> Result<BTreeMap<String, f64>> {
+    let mut params = BTreeMap::new();
+    for p in args {
+        let Some((k, v)) = p.split_once('=') else {
+            bail!("--param {p:?}: expected NAME=VALUE");
+        };
+        let Ok(v) = v.trim().parse::<f64>() else {
+            bail!("--param {p:?}: value {v:?} is not a number");
+        };
+        params.insert(k.trim().to_string(), v);
+    }
+    Ok(params)
+}
+
 /// What a case runs with.
 #[derive(Clone, Debug)]
 pub struct CaseSettings {

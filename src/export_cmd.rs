@@ -5,7 +5,7 @@
 //! objective) and `run.json` (scene, settings, final status). An external QP solver can then be
 //! run on contact QPs; `contactlab_solvers::qps::read_qps_file` reads them back.
 
-use crate::case::{build_scene, execute_with, f, CaseSettings};
+use crate::case::{build_scene, execute_with, f, parse_params, CaseSettings};
 use anyhow::{bail, Context, Result};
 use contactlab::capture::Capture;
 use contactlab::outer::Pruning;
@@ -13,7 +13,6 @@ use contactlab::output::write_atomic;
 use contactlab::presets::Accuracy;
 use contactlab_solvers::qps::write_qps_file;
 use contactlab_solvers::{backend_from_name, Qp, QpError, QpSolution};
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -50,17 +49,7 @@ pub struct ExportArgs {
 
 /// `contactlab export-qp`.
 pub fn cmd_export(a: &ExportArgs) -> Result<()> {
-    let mut params = BTreeMap::new();
-    for p in &a.params {
-        let (k, v) = p
-            .split_once('=')
-            .with_context(|| format!("--param {p:?}: expected NAME=VALUE"))?;
-        let v: f64 = v
-            .trim()
-            .parse()
-            .with_context(|| format!("--param {p:?}: value {v:?} is not a number"))?;
-        params.insert(k.trim().to_string(), v);
-    }
+    let params = parse_params(&a.params)?;
     let accuracy = Accuracy::from_name(&a.accuracy)
         .with_context(|| format!("--accuracy {:?}: expected low, default or high", a.accuracy))?;
     let pruning = Pruning::from_name(&a.pruning).with_context(|| {

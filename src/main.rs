@@ -217,15 +217,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
                 eps: a.eps,
                 ..Default::default()
             };
-            for kv in &a.params {
-                let (k, v) = kv
-                    .split_once('=')
-                    .with_context(|| format!("--param {kv:?}: expected NAME=VALUE"))?;
-                let v: f64 = v
-                    .trim()
-                    .parse()
-                    .with_context(|| format!("--param {kv:?}: {v:?} is not a number"))?;
-                match k.trim() {
+            for (k, v) in case::parse_params(&a.params)? {
+                match k.as_str() {
                     "p" => params.p = v,
                     "aspect" => params.aspect = v,
                     "half_span" => params.half_span = v,

@@ -157,27 +157,33 @@ impl Energy for GasEnergy {
             w: self.area_gradient(x),
         });
         let k = -self.c * self.sign / (2.0 * v);
-        let mut m = [[0.0; 2 * DIM]; 2 * DIM];
-        // S with S² = I
-        m[0][3] = k;
-        m[3][0] = k;
-        m[1][2] = -k;
-        m[2][1] = -k;
-        if projected {
-            for (d, row) in m.iter_mut().enumerate() {
-                for v in row.iter_mut() {
-                    *v *= 0.5;
-                }
-                row[d] = 0.5 * k.abs();
-            }
-        }
-        let n = self.polygon.len();
-        chunked_triplets(n, &mut h.triplets, |i, out| {
-            let a = self.polygon[i];
-            let b = self.polygon[(i + 1) % n];
-            push_block(out, DIM, &[a, b], |r, c| m[r][c]);
-        });
+        shoelace_hessian(&self.polygon, k, projected, h);
     }
+}
+
+/// Adds `Σ_i k·S` on the consecutive vertex pairs `(x_i, x_{i+1})` of a closed `polygon`, `S`
+/// the 4×4 shoelace block with `S² = I` (so `k·S` has eigenvalues `±k`); with `projected`, each
+/// block is replaced by its PSD part `(k S + |k| I)/2`. Shared by the gas and pressure terms.
+pub(crate) fn shoelace_hessian(polygon: &[usize], k: f64, projected: bool, h: &mut Hessian) {
+    let mut m = [[0.0; 2 * DIM]; 2 * DIM];
+    m[0][3] = k;
+    m[3][0] = k;
+    m[1][2] = -k;
+    m[2][1] = -k;
+    if projected {
+        for (d, row) in m.iter_mut().enumerate() {
+            for v in row.iter_mut() {
+                *v *= 0.5;
+            }
+            row[d] = 0.5 * k.abs();
+        }
+    }
+    let n = polygon.len();
+    chunked_triplets(n, &mut h.triplets, |i, out| {
+        let a = polygon[i];
+        let b = polygon[(i + 1) % n];
+        push_block(out, DIM, &[a, b], |r, c| m[r][c]);
+    });
 }
 
 #[cfg(test)]

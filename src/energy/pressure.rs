@@ -30,7 +30,7 @@
 //! per-vertex contribution scatter-added in polygon order, the Hessian triplets are produced in
 //! chunks in shoelace-term order; all bit-identical for any thread count.
 
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{chunked_sum, par_scatter, Energy, Hessian};
 
 const DIM: usize = 2;
 
@@ -115,25 +115,7 @@ impl Energy for PressureEnergy {
     /// block is replaced by its PSD part `((p/2) S + |p/2| I)/2` (module docs).
     fn add_hessian(&self, _x: &[f64], projected: bool, h: &mut Hessian) {
         let k = 0.5 * self.p;
-        let mut m = [[0.0; 2 * DIM]; 2 * DIM];
-        m[0][3] = k;
-        m[3][0] = k;
-        m[1][2] = -k;
-        m[2][1] = -k;
-        if projected {
-            for (d, row) in m.iter_mut().enumerate() {
-                for v in row.iter_mut() {
-                    *v *= 0.5;
-                }
-                row[d] = 0.5 * k.abs();
-            }
-        }
-        let n = self.polygon.len();
-        chunked_triplets(n, &mut h.triplets, |i, out| {
-            let a = self.polygon[i];
-            let b = self.polygon[(i + 1) % n];
-            push_block(out, DIM, &[a, b], |r, c| m[r][c]);
-        });
+        super::gas::shoelace_hessian(&self.polygon, k, projected, h);
     }
 }
 
