@@ -26,6 +26,7 @@ pub mod output;
 pub mod pairs;
 pub mod presets;
 pub mod rows;
+pub mod rows3d;
 pub mod scene;
 pub mod subproblem;
 

@@ -20,16 +20,24 @@
 #[cfg(test)]
 mod fd_test;
 pub mod gas;
+pub mod gas3d;
 pub mod gravity;
 pub mod membrane;
+pub mod membrane3d;
 pub mod neo_hookean;
+pub mod neo_hookean3d;
 pub mod pressure;
+pub mod string3d;
 
 pub use gas::GasEnergy;
+pub use gas3d::{Gas3dEnergy, OpenSurface};
 pub use gravity::Gravity;
 pub use membrane::MembraneEnergy;
+pub use membrane3d::Membrane3dEnergy;
 pub use neo_hookean::NeoHookean2d;
+pub use neo_hookean3d::{DegenerateTet, NeoHookean3d};
 pub use pressure::PressureEnergy;
+pub use string3d::String3dEnergy;
 
 use rayon::prelude::*;
 use std::ops::Range;
