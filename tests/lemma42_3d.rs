@@ -143,3 +143,82 @@ fn remark43_edges_pass_through_without_edge_edge_rows() {
         "no row forbids the pass-through (min row value {worst})"
     );
 }
+
+/// Random soups of small triangles: the BVH pair search finds exactly the pairs of the O(N²)
+/// search, and the BVH form of the exact check gives the same minimum.
+#[test]
+fn broad_phase_3d_matches_all_pairs() {
+    use contactlab::geometry::{point_triangle_distance, segment_segment_distance};
+    use contactlab::rows3d::p3;
+    use contactlab::rows3d::{min_distance_3d_bvh, near_pairs_3d};
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    for trial in 0..40 {
+        let nt = 30;
+        let mut x = Vec::new();
+        let mut tris = Vec::new();
+        let mut edges = Vec::new();
+        for t in 0..nt {
+            let c = [
+                rng.gen_range(0.0..3.0),
+                rng.gen_range(0.0..3.0),
+                rng.gen_range(0.0..3.0),
+            ];
+            for _ in 0..3 {
+                for k in 0..3 {
+                    x.push(c[k] + rng.gen_range(-0.3..0.3));
+                }
+            }
+            let o = 3 * t;
+            tris.push([o, o + 1, o + 2]);
+            edges.extend_from_slice(&[[o, o + 1], [o + 1, o + 2], [o + 2, o]]);
+        }
+        let verts: Vec<usize> = (0..3 * nt).collect();
+        let r = 0.25;
+        let near = near_pairs_3d(&x, &verts, &edges, &tris, r);
+        let mut vt = Vec::new();
+        for (ti, t) in tris.iter().enumerate() {
+            for &v in &verts {
+                if !t.contains(&v) {
+                    let d = point_triangle_distance(
+                        &p3(&x, v),
+                        &p3(&x, t[0]),
+                        &p3(&x, t[1]),
+                        &p3(&x, t[2]),
+                    )
+                    .distance;
+                    if d < r {
+                        vt.push((v, ti, d));
+                    }
+                }
+            }
+        }
+        vt.sort_by(|p, q| (p.0, p.1).cmp(&(q.0, q.1)));
+        let mut ee = Vec::new();
+        for (ai, a) in edges.iter().enumerate() {
+            for (bi, b) in edges.iter().enumerate().skip(ai + 1) {
+                if a.iter().any(|v| b.contains(v)) {
+                    continue;
+                }
+                let d = segment_segment_distance(
+                    &p3(&x, a[0]),
+                    &p3(&x, a[1]),
+                    &p3(&x, b[0]),
+                    &p3(&x, b[1]),
+                )
+                .distance;
+                if d < r {
+                    ee.push((ai, bi, d));
+                }
+            }
+        }
+        assert_eq!(near.vertex_triangle, vt, "trial {trial}");
+        assert_eq!(near.edge_edge, ee, "trial {trial}");
+        assert!(
+            !vt.is_empty() && !ee.is_empty(),
+            "trial {trial}: nothing near, test vacuous"
+        );
+        let brute = min_distance_3d(&x, &verts, &edges, &tris);
+        let fast = min_distance_3d_bvh(&x, &verts, &edges, &tris, 0.01);
+        assert_eq!(brute.0, fast.0, "trial {trial}: {brute:?} vs {fast:?}");
+    }
+}
