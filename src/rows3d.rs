@@ -346,9 +346,8 @@ pub fn near_pairs_3d(
             }
         }
     }
-    out.vertex_triangle
-        .sort_by(|p, q| (p.0, p.1).cmp(&(q.0, q.1)));
-    out.edge_edge.sort_by(|p, q| (p.0, p.1).cmp(&(q.0, q.1)));
+    out.vertex_triangle.sort_by_key(|p| (p.0, p.1));
+    out.edge_edge.sort_by_key(|p| (p.0, p.1));
     out
 }
 

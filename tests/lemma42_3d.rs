@@ -192,7 +192,7 @@ fn broad_phase_3d_matches_all_pairs() {
                 }
             }
         }
-        vt.sort_by(|p, q| (p.0, p.1).cmp(&(q.0, q.1)));
+        vt.sort_by_key(|p| (p.0, p.1));
         let mut ee = Vec::new();
         for (ai, a) in edges.iter().enumerate() {
             for (bi, b) in edges.iter().enumerate().skip(ai + 1) {
