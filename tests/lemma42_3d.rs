@@ -164,8 +164,8 @@ fn broad_phase_3d_matches_all_pairs() {
                 rng.gen_range(0.0..3.0),
             ];
             for _ in 0..3 {
-                for k in 0..3 {
-                    x.push(c[k] + rng.gen_range(-0.3..0.3));
+                for ck in c {
+                    x.push(ck + rng.gen_range(-0.3..0.3));
                 }
             }
             let o = 3 * t;
