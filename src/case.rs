@@ -69,6 +69,45 @@ pub fn build_scene(
     }
 }
 
+/// The coarsest mesh level `n` of scene `name` whose mesh size is at most `h`: balloons
+/// `h = 1.6/n`, so `n = ⌈1.6/h⌉`; ring `h = 2 sin(π/n)` with n even, so the smallest even
+/// `n ≥ π / asin(h/2)` (at least 6).
+pub fn n_for_h(name: &str, h: f64) -> Result<usize> {
+    if !(h.is_finite() && h > 0.0) {
+        bail!("h = {h}: a mesh size must be finite and > 0");
+    }
+    let n = match name {
+        "balloons" => {
+            let mut n = (1.6 / h).ceil().max(1.0) as usize;
+            // guard the rounding of 1.6/h
+            while n > 1 && 1.6 / ((n - 1) as f64) <= h {
+                n -= 1;
+            }
+            n
+        }
+        "ring" => {
+            if h >= 2.0 {
+                6
+            } else {
+                let mut n = ((std::f64::consts::PI / (h / 2.0).asin()).ceil() as usize).max(6);
+                n += n % 2;
+                while n > 6 && ring::mesh_size(n - 2) <= h {
+                    n -= 2;
+                }
+                while ring::mesh_size(n) > h {
+                    n += 2;
+                }
+                n
+            }
+        }
+        other => bail!("unknown scene {other:?} (available: {})", SCENES.join(", ")),
+    };
+    if n > 10_000_000 {
+        bail!("h = {h} needs n = {n} elements: too fine");
+    }
+    Ok(n)
+}
+
 /// Parses `NAME=VALUE` scene parameters (`--param`, repeatable); the error names the argument.
 pub fn parse_params(args: &[String]) -> Result<BTreeMap<String, f64>> {
     let mut params = BTreeMap::new();

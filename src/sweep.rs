@@ -189,8 +189,13 @@ pub struct Common {
 pub struct SceneBlock {
     /// Scene name.
     pub name: String,
-    /// Mesh levels.
+    /// Mesh levels (give `n` or `h`).
+    #[serde(default)]
     pub n: Vec<usize>,
+    /// Mesh sizes: each becomes the coarsest level `n` whose h is at most the value
+    /// ([`crate::case::n_for_h`]); the row's `h` column holds the scene's actual h.
+    #[serde(default)]
+    pub h: Vec<f64>,
     /// ε rule(s); default `{ c = 0.1, p = 1 }` (h/10).
     pub eps: Option<OneOrMany<EpsRule>>,
     /// Numeric scene parameters.
@@ -388,10 +393,21 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         for r in &rules {
             r.check(&b.name)?;
         }
-        if b.n.is_empty() {
-            bail!("scene block {} ({}): empty list n", bi + 1, b.name);
+        let mut levels = b.n.clone();
+        for &h in &b.h {
+            levels.push(
+                crate::case::n_for_h(&b.name, h)
+                    .with_context(|| format!("scene block {} ({})", bi + 1, b.name))?,
+            );
         }
-        for &n in &b.n {
+        if levels.is_empty() {
+            bail!(
+                "scene block {} ({}): give a list n or a list h",
+                bi + 1,
+                b.name
+            );
+        }
+        for &n in &levels {
             // building the scene checks its name and parameters and gives h
             let h = build_scene(&b.name, n, None, &b.params)
                 .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
@@ -839,6 +855,28 @@ mod tests {
                 .contains("bogus")
         );
         assert!(e("[[scene]]\nname = \"balloons\"\nn = [20, 20]").contains("twice"));
+    }
+
+    #[test]
+    fn sweep_h_lists_become_levels() {
+        let runs = parse("[[scene]]\nname = \"balloons\"\nh = [0.08, 0.05]\n[[scene]]\nname = \"ring\"\nh = [0.1]").unwrap();
+        let ns: Vec<usize> = runs.iter().map(|r| r.n).collect();
+        assert_eq!(ns, vec![20, 32, 64]);
+        assert!((runs[0].h - 0.08).abs() < 1e-15 && runs[1].h <= 0.05 && runs[2].h <= 0.1);
+        // the ring's level is the coarsest even n with h ≤ 0.1
+        let coarser = crate::case::build_scene("ring", 62, None, &Default::default())
+            .unwrap()
+            .h;
+        assert!(coarser > 0.1, "{coarser}");
+        let e = format!(
+            "{:#}",
+            parse("[[scene]]\nname = \"ring\"\nh = [-1.0]").unwrap_err()
+        );
+        assert!(e.contains("h = -1"), "{e}");
+        assert!(
+            format!("{:#}", parse("[[scene]]\nname = \"ring\"").unwrap_err())
+                .contains("list n or a list h")
+        );
     }
 
     #[test]
