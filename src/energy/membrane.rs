@@ -22,9 +22,10 @@
 
 use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
 
-/// Tension-only membrane energy of a set of edges (2D).
+/// Tension-only energy of a set of P1 edges in `D` dimensions: [`MembraneEnergy`] (2D, the
+/// balloons' membranes) and [`super::String3dEnergy`] (3D strings and rods) are this type.
 #[derive(Clone, Debug)]
-pub struct MembraneEnergy {
+pub struct TensionString<const D: usize> {
     /// Edges `[v0, v1]`.
     pub edges: Vec<[usize; 2]>,
     /// Reference length of each edge.
@@ -33,17 +34,26 @@ pub struct MembraneEnergy {
     pub mu: f64,
 }
 
-const DIM: usize = 2;
+/// Tension-only membrane energy of a set of edges (2D).
+pub type MembraneEnergy = TensionString<2>;
 
-impl MembraneEnergy {
-    /// Builds the energy, taking rest lengths from the reference positions `x_ref` (flat, 2D).
+impl<const D: usize> TensionString<D> {
+    /// Builds the energy, taking rest lengths from the reference positions `x_ref` (flat, `D`
+    /// per vertex).
     pub fn new(edges: Vec<[usize; 2]>, x_ref: &[f64], mu: f64) -> Self {
         let rest_length = edges
             .iter()
             .map(|&[a, b]| {
-                let dx = x_ref[DIM * b] - x_ref[DIM * a];
-                let dy = x_ref[DIM * b + 1] - x_ref[DIM * a + 1];
-                dx.hypot(dy)
+                if D == 2 {
+                    let dx = x_ref[D * b] - x_ref[D * a];
+                    let dy = x_ref[D * b + 1] - x_ref[D * a + 1];
+                    dx.hypot(dy)
+                } else {
+                    (0..D)
+                        .map(|c| (x_ref[D * b + c] - x_ref[D * a + c]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                }
             })
             .collect();
         Self {
@@ -54,18 +64,25 @@ impl MembraneEnergy {
     }
 
     /// `(e, s)` for edge `k`: `e = x1 − x0`, `s = |e|²/L² − 1`.
-    fn edge_state(&self, x: &[f64], k: usize) -> ([f64; 2], f64) {
+    fn edge_state(&self, x: &[f64], k: usize) -> ([f64; D], f64) {
         let [a, b] = self.edges[k];
         let l = self.rest_length[k];
-        let e = [x[DIM * b] - x[DIM * a], x[DIM * b + 1] - x[DIM * a + 1]];
-        let s = (e[0] * e[0] + e[1] * e[1]) / (l * l) - 1.0;
+        let mut e = [0.0; D];
+        for (c, ec) in e.iter_mut().enumerate() {
+            *ec = x[D * b + c] - x[D * a + c];
+        }
+        let s = e.iter().map(|v| v * v).sum::<f64>() / (l * l) - 1.0;
         (e, s)
     }
 }
 
-impl Energy for MembraneEnergy {
+impl<const D: usize> Energy for TensionString<D> {
     fn name(&self) -> &str {
-        "membrane"
+        if D == 2 {
+            "membrane"
+        } else {
+            "string3d"
+        }
     }
 
     fn value(&self, x: &[f64]) -> f64 {
@@ -91,13 +108,13 @@ impl Energy for MembraneEnergy {
                     return None;
                 }
                 let c = 4.0 * self.mu * s / self.rest_length[k];
-                Some([c * e[0], c * e[1]])
+                Some(e.map(|v| c * v))
             },
             |k, ce, g| {
                 let [a, b] = self.edges[k];
-                for i in 0..DIM {
-                    g[DIM * b + i] += ce[i];
-                    g[DIM * a + i] -= ce[i];
+                for i in 0..D {
+                    g[D * b + i] += ce[i];
+                    g[D * a + i] -= ce[i];
                 }
             },
         );
@@ -112,16 +129,16 @@ impl Energy for MembraneEnergy {
             }
             let l = self.rest_length[k];
             let c = 4.0 * self.mu / l;
-            let mut hb = [[0.0; DIM]; DIM];
+            let mut hb = [[0.0; D]; D];
             for (i, row) in hb.iter_mut().enumerate() {
                 for (j, hij) in row.iter_mut().enumerate() {
                     *hij = c * (if i == j { s } else { 0.0 } + 2.0 * e[i] * e[j] / (l * l));
                 }
             }
             // block [[H, −H], [−H, H]]
-            push_block(out, DIM, &self.edges[k], |r, q| {
-                let v = hb[r % DIM][q % DIM];
-                if (r < DIM) == (q < DIM) {
+            push_block(out, D, &self.edges[k], |r, q| {
+                let v = hb[r % D][q % D];
+                if (r < D) == (q < D) {
                     v
                 } else {
                     -v

@@ -21,122 +21,15 @@
 //! for `|F| < 1`, so the exact Hessian is already positive semi-definite: `projected` changes
 //! nothing.
 
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
-
-/// Tension-only string energy of a set of edges (3D).
-#[derive(Clone, Debug)]
-pub struct String3dEnergy {
-    /// Edges `[v0, v1]`.
-    pub edges: Vec<[usize; 2]>,
-    /// Reference length of each edge.
-    pub rest_length: Vec<f64>,
-    /// Stiffness `μ`.
-    pub mu: f64,
-}
-
-const DIM: usize = 3;
-
-impl String3dEnergy {
-    /// Builds the energy, taking rest lengths from the reference positions `x_ref` (flat, 3D).
-    pub fn new(edges: Vec<[usize; 2]>, x_ref: &[f64], mu: f64) -> Self {
-        let rest_length = edges
-            .iter()
-            .map(|&[a, b]| {
-                (0..DIM)
-                    .map(|k| (x_ref[DIM * b + k] - x_ref[DIM * a + k]).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
-        Self {
-            edges,
-            rest_length,
-            mu,
-        }
-    }
-
-    /// `(e, s)` for edge `k`: `e = x1 − x0`, `s = |e|²/L² − 1`.
-    fn edge_state(&self, x: &[f64], k: usize) -> ([f64; DIM], f64) {
-        let [a, b] = self.edges[k];
-        let l = self.rest_length[k];
-        let e: [f64; DIM] = std::array::from_fn(|i| x[DIM * b + i] - x[DIM * a + i]);
-        let s = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) / (l * l) - 1.0;
-        (e, s)
-    }
-}
-
-impl Energy for String3dEnergy {
-    fn name(&self) -> &str {
-        "string3d"
-    }
-
-    fn value(&self, x: &[f64]) -> f64 {
-        chunked_sum(self.edges.len(), |r| {
-            let mut sum = 0.0;
-            for k in r {
-                let (_, s) = self.edge_state(x, k);
-                if s > 0.0 {
-                    sum += self.mu * self.rest_length[k] * s * s;
-                }
-            }
-            sum
-        })
-    }
-
-    fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
-        par_scatter(
-            self.edges.len(),
-            g,
-            |k| {
-                let (e, s) = self.edge_state(x, k);
-                if s <= 0.0 {
-                    return None;
-                }
-                let c = 4.0 * self.mu * s / self.rest_length[k];
-                Some(e.map(|ei| c * ei))
-            },
-            |k, ce, g| {
-                let [a, b] = self.edges[k];
-                for i in 0..DIM {
-                    g[DIM * b + i] += ce[i];
-                    g[DIM * a + i] -= ce[i];
-                }
-            },
-        );
-    }
-
-    /// Exact Hessian; it is already positive semi-definite, so `projected` is ignored.
-    fn add_hessian(&self, x: &[f64], _projected: bool, h: &mut Hessian) {
-        chunked_triplets(self.edges.len(), &mut h.triplets, |k, out| {
-            let (e, s) = self.edge_state(x, k);
-            if s <= 0.0 {
-                return;
-            }
-            let l = self.rest_length[k];
-            let c = 4.0 * self.mu / l;
-            let mut hb = [[0.0; DIM]; DIM];
-            for (i, row) in hb.iter_mut().enumerate() {
-                for (j, hij) in row.iter_mut().enumerate() {
-                    *hij = c * (if i == j { s } else { 0.0 } + 2.0 * e[i] * e[j] / (l * l));
-                }
-            }
-            // block [[H, −H], [−H, H]]
-            push_block(out, DIM, &self.edges[k], |r, q| {
-                let v = hb[r % DIM][q % DIM];
-                if (r < DIM) == (q < DIM) {
-                    v
-                } else {
-                    -v
-                }
-            });
-        });
-    }
-}
+/// Tension-only string energy of a set of edges (3D): the generic
+/// [`super::membrane::TensionString`] in three dimensions.
+pub type String3dEnergy = super::membrane::TensionString<3>;
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
+    use crate::energy::{Energy, Hessian};
     use nalgebra::{Rotation3, Vector3};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
