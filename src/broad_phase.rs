@@ -409,6 +409,7 @@ mod tests {
                 vertices: (first..first + per).collect(),
                 edges: be,
                 triangles: vec![],
+                ..Default::default()
             });
         }
         let nv = x.len() / 2;
@@ -421,6 +422,7 @@ mod tests {
             edge_body,
             triangles: vec![],
             bodies,
+            ..Default::default()
         }
     }
 
@@ -552,6 +554,7 @@ mod tests {
             edge_body: vec![0, 1, 2, 2],
             triangles: vec![],
             bodies: vec![],
+            ..Default::default()
         };
         assert_eq!(first_crossing(&mesh, &x, false), Some((0, 1)));
         let mut y = x.clone();

@@ -196,8 +196,9 @@ pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// The H¹ Gram matrix `G = M + K` of P1 functions on the reference mesh (curves: their edges;
-/// solids: their triangles), one copy per coordinate, restricted to the free dofs (upper
-/// triangle, CSC).
+/// 2D solids and 3D surfaces: their triangles, with tangential gradients on surfaces; 3D solids:
+/// their tetrahedra), one copy per coordinate, restricted to the free dofs (upper triangle,
+/// CSC).
 pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
     let (col, nfree) = free_cols(mesh);
     let d = mesh.dim;
@@ -215,12 +216,13 @@ pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
         }
     };
     let xr = &mesh.x_ref;
+    let pt = |v: usize| mesh.point(xr, v);
     for body in &mesh.bodies {
-        match body.kind {
-            BodyKind::Curve => {
+        match (body.kind, mesh.dim) {
+            (BodyKind::Curve, _) => {
                 for &e in &body.edges {
                     let [a, b] = mesh.edges[e];
-                    let l = (Mesh::p2(xr, a) - Mesh::p2(xr, b)).norm();
+                    let l = (pt(a) - pt(b)).norm();
                     add(&[a, b], &|i, j| {
                         let mass = if i == j { l / 3.0 } else { l / 6.0 };
                         let stiff = if i == j { 1.0 / l } else { -1.0 / l };
@@ -228,21 +230,41 @@ pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
                     });
                 }
             }
-            BodyKind::Solid => {
+            // triangles: 2D solids, 3D surfaces (tangential gradients)
+            (BodyKind::Solid, 2) | (BodyKind::Surface, _) => {
                 for &t in &body.triangles {
                     let vs = mesh.triangles[t];
-                    let p: Vec<_> = vs.iter().map(|&v| Mesh::p2(xr, v)).collect();
-                    let area = 0.5 * (p[1] - p[0]).perp(&(p[2] - p[0]));
-                    // ∇φ_i = perp(opposite edge) / (2·area), rotated inward.
-                    let grads: Vec<nalgebra::Vector2<f64>> = (0..3)
-                        .map(|i| {
-                            let e = p[(i + 2) % 3] - p[(i + 1) % 3];
-                            nalgebra::Vector2::new(-e.y, e.x) / (2.0 * area)
-                        })
-                        .collect();
+                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
+                    let nrm = (p[1] - p[0]).cross(&(p[2] - p[0]));
+                    let area = 0.5 * nrm.norm();
+                    // ∇φ_i = n̂ × e_i / (2·area), e_i the edge opposite vertex i (cyclic):
+                    // ∇φ_i·∇φ_j = e_i·e_j / (4·area²).
+                    let e: Vec<_> = (0..3).map(|i| p[(i + 2) % 3] - p[(i + 1) % 3]).collect();
                     add(&vs, &|i, j| {
                         let mass = if i == j { area / 6.0 } else { area / 12.0 };
-                        mass + area * grads[i].dot(&grads[j])
+                        mass + e[i].dot(&e[j]) / (4.0 * area)
+                    });
+                }
+            }
+            (BodyKind::Solid, _) => {
+                for &t in &body.tets {
+                    let vs = mesh.tets[t];
+                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
+                    let m =
+                        nalgebra::Matrix3::from_columns(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]);
+                    let vol = m.determinant() / 6.0;
+                    let Some(minv) = m.try_inverse() else {
+                        continue;
+                    };
+                    // ∇φ_1..3 are the rows of M⁻¹, ∇φ_0 = −Σ.
+                    let mut grads = vec![nalgebra::Vector3::zeros(); 4];
+                    for k in 0..3 {
+                        grads[k + 1] = minv.row(k).transpose();
+                    }
+                    grads[0] = -(grads[1] + grads[2] + grads[3]);
+                    add(&vs, &|i, j| {
+                        let mass = if i == j { vol / 10.0 } else { vol / 20.0 };
+                        mass + vol * grads[i].dot(&grads[j])
                     });
                 }
             }

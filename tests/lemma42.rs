@@ -37,6 +37,7 @@ fn random_mesh(rng: &mut ChaCha8Rng) -> Mesh {
             vertices: (first..first + nv).collect(),
             edges: be,
             triangles: vec![],
+            ..Default::default()
         });
     }
     let nv = x.len() / 2;
@@ -48,6 +49,7 @@ fn random_mesh(rng: &mut ChaCha8Rng) -> Mesh {
         edge_body,
         triangles: vec![],
         bodies,
+        ..Default::default()
     }
 }
 

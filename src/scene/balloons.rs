@@ -202,6 +202,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             vertices: verts,
             edges: body_edges,
             triangles: vec![],
+            ..Default::default()
         });
     }
     bodies.push(Body {
@@ -211,6 +212,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
         vertices: box_vertices,
         edges: box_edges,
         triangles: vec![],
+        ..Default::default()
     });
     for (k, (verts, medges)) in membranes.into_iter().enumerate() {
         energy
@@ -230,6 +232,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
         edge_body,
         triangles: vec![],
         bodies,
+        ..Default::default()
     };
     Ok(Scene {
         name: "balloons".into(),

@@ -226,7 +226,9 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
             vertices: (0..n).collect(),
             edges: (0..n).collect(),
             triangles: vec![],
+            ..Default::default()
         }],
+        ..Default::default()
     };
     let md = min_distance_near(&mesh, &x0, 2.0 * eps, false);
     if md.distance < eps {
