@@ -257,7 +257,7 @@ pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
                         continue;
                     };
                     // ∇φ_1..3 are the rows of M⁻¹, ∇φ_0 = −Σ.
-                    let mut grads = vec![nalgebra::Vector3::zeros(); 4];
+                    let mut grads = [nalgebra::Vector3::zeros(); 4];
                     for k in 0..3 {
                         grads[k + 1] = minv.row(k).transpose();
                     }

@@ -164,7 +164,7 @@ impl Mesh {
         if self.dim != 2 && self.dim != 3 {
             return Err(MeshError::Dimension(self.dim));
         }
-        if self.x_ref.len() % self.dim != 0 || self.fixed.len() != self.nv() {
+        if !self.x_ref.len().is_multiple_of(self.dim) || self.fixed.len() != self.nv() {
             return Err(MeshError::Lengths {
                 coords: self.x_ref.len(),
                 dim: self.dim,
