@@ -15,7 +15,7 @@
 //!   counted (no narrow phase), so the grid's superset and the BVH's exact answer cost their
 //!   own query time only. The contact vertex list is computed once, outside the timed loop;
 //! - `assembly/pruned_qp`: the rows of the pairs found by the first bench
-//!   (`point_edge_rows`) then `build_qp` (gradient, projected Hessian, QP matrices); the pairs
+//!   (`contact::rows_for`) then `build_qp` (gradient, projected Hessian, QP matrices); the pairs
 //!   are found once, outside the timed loop.
 //!
 //! Throughput is reported in vertices. Run with
@@ -31,10 +31,10 @@ use std::time::Duration;
 
 use contactlab::broad_phase::{min_distance_near, point_edge_near, Aabb, AabbGrid};
 use contactlab::bvh::Bvh;
+use contactlab::contact::{rows_for, ContactPair};
 use contactlab::mesh::Mesh;
 use contactlab::outer::median_edge_length;
 use contactlab::pairs::PointEdgePair;
-use contactlab::rows::point_edge_rows;
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::Scene;
 use contactlab::subproblem::{build_qp, DofMap, InnerSettings};
@@ -180,11 +180,11 @@ fn benches(c: &mut Criterion) {
     for f in &fixtures {
         let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
         let dofs = DofMap::new(mesh);
-        let pairs = f.pairs();
+        let pairs: Vec<ContactPair> = f.pairs().into_iter().map(Into::into).collect();
         group.throughput(Throughput::Elements(mesh.nv() as u64));
         group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
             b.iter(|| {
-                let rows = point_edge_rows(mesh, black_box(x), &pairs).expect("x0 admissible");
+                let rows = rows_for(mesh, black_box(x), &pairs).expect("x0 admissible");
                 build_qp(
                     mesh,
                     &f.scene.energy,

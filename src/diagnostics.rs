@@ -1,18 +1,19 @@
-//! Diagnostics of a run: the contact pattern (which bodies touch which).
+//! Diagnostics of a run: the contact pattern (which bodies touch which), and the Lemma 5.4
+//! multipliers and Lemma 5.6 residual of a converged run.
 //!
-//! Two bodies touch when some `point_edge` pair between them (vertex of one, edge of the
-//! other, x ∉ a) is at distance `< 1.01 ε`. A vertex shared by two bodies (a membrane glued to
-//! its support) counts for both.
+//! Two bodies touch when some pair of disjoint contact elements between them (2D: vertex of
+//! one, edge of the other; 3D: vertex–face or edge–edge) is at distance `< 1.01 ε`. A vertex
+//! shared by two bodies (a membrane glued to its support) counts for both.
 
-use crate::geometry::point_edge_distance;
+use crate::contact::{near_pairs, pair_rows, rows_for, ContactPair, PairRows};
 use crate::mesh::{BodyKind, Mesh};
-use crate::pairs::PointEdgePair;
 
-/// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact).
+/// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact), among
+/// `pairs` (e.g. [`near_pairs`] within `1.01 ε`).
 pub fn contact_pattern(
     mesh: &Mesh,
     x: &[f64],
-    pairs: &[PointEdgePair],
+    pairs: &[ContactPair],
     eps: f64,
 ) -> Vec<(usize, usize)> {
     let nbodies = mesh.bodies.len();
@@ -23,22 +24,33 @@ pub fn contact_pattern(
         }
     }
     let mut touch = vec![false; nbodies * nbodies];
-    for p in pairs {
-        let e = mesh.edges[p.a];
-        let d =
-            point_edge_distance(&Mesh::p2(x, p.x), &Mesh::p2(x, e[0]), &Mesh::p2(x, e[1])).distance;
-        if d < 1.01 * eps {
-            let be = mesh.edge_body[p.a];
-            let vb = &vertex_bodies[p.x];
-            for &bv in vb {
-                // A glued vertex's own body contact with the edge's body is the glue, not a
-                // contact; count self-contact only for a vertex of that body alone.
-                if bv == be && vb.len() > 1 {
-                    continue;
+    let mut mark = |i: usize, j: usize| {
+        let (i, j) = if i < j { (i, j) } else { (j, i) };
+        touch[i * nbodies + j] = true;
+    };
+    for &p in pairs {
+        let d = pair_rows(mesh, x, p).map_or(0.0, |r| r.distance);
+        if d >= 1.01 * eps {
+            continue;
+        }
+        match p {
+            ContactPair::PointEdge { x: v, a } | ContactPair::VertexTriangle { x: v, t: a } => {
+                let be = if matches!(p, ContactPair::PointEdge { .. }) {
+                    mesh.edge_body[a]
+                } else {
+                    mesh.face_body[a]
+                };
+                let vb = &vertex_bodies[v];
+                for &bv in vb {
+                    // A glued vertex's own body contact with the element's body is the glue,
+                    // not a contact; count self-contact only for a vertex of that body alone.
+                    if bv == be && vb.len() > 1 {
+                        continue;
+                    }
+                    mark(bv, be);
                 }
-                let (i, j) = if bv < be { (bv, be) } else { (be, bv) };
-                touch[i * nbodies + j] = true;
             }
+            ContactPair::EdgeEdge { a, b } => mark(mesh.edge_body[a], mesh.edge_body[b]),
         }
     }
     let mut out = Vec::new();
@@ -56,9 +68,7 @@ pub fn contact_pattern(
 // Lemma 5.4 multipliers and the Lemma 5.6 residual of a converged run (SPEC §3).
 // ---------------------------------------------------------------------------------------------
 
-use crate::broad_phase::point_edge_near;
 use crate::energy::TotalEnergy;
-use crate::rows::{point_edge_rows, PointEdgeRow};
 use contactlab_solvers::uzawa::SparseLdl;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus};
 use std::collections::{BTreeMap, HashMap};
@@ -66,7 +76,7 @@ use std::collections::{BTreeMap, HashMap};
 /// Settings of [`converged_diagnostics`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct DiagnosticSettings {
-    /// A row `n·(φ(a_i) − φ(x)) ≥ ε` of T(φ_h) is active when its value is at most
+    /// A row `n·(φ(p) − φ(q)) ≥ ε` of T(φ_h) is active when its value is at most
     /// `ε + active_tol`. Default `2·(1e-6·ε + 1e-11)`: twice the sub-problems' row margin
     /// (`InnerSettings::margin_rel`, `margin_abs`), the count the outer loop reports.
     pub active_tol: f64,
@@ -85,22 +95,27 @@ impl DiagnosticSettings {
     }
 }
 
-/// One contact pair at the fixed point: its rows, canonical duals and per-length multiplier.
+/// One contact pair at the fixed point: its rows, canonical duals and per-length (2D) or
+/// per-area (3D) multiplier.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PairMultiplier {
-    /// Vertex x.
-    pub x: usize,
-    /// Edge a.
-    pub a: usize,
-    /// `dist(φ_h(x), φ_h(a))`.
+    /// `point_edge`, `vertex_triangle` or `edge_edge`.
+    pub kind: &'static str,
+    /// First element: the vertex x (point–edge, vertex–triangle) or edge a (edge–edge).
+    pub first: usize,
+    /// Second element: the edge a (point–edge), face T (vertex–triangle) or edge b.
+    pub second: usize,
+    /// Number of rows of the pair (2, 3 or 4).
+    pub rows: usize,
+    /// The pair's distance at φ_h.
     pub distance: f64,
-    /// Barycentric coordinates `(α⁰, α¹)` of the closest point `p_{a,x}` on the edge.
-    pub alpha: [f64; 2],
+    /// Barycentric weight of each row in the closest points (2D: `(α⁰, α¹)` of `p_{a,x}`).
+    pub weight: [f64; 4],
     /// Whether each row is active.
-    pub active: [bool; 2],
-    /// Canonical duals `(λ⁰, λ¹)` of the two rows, QP scaling (`h·λ` per row, SPEC §3).
-    pub mu: [f64; 2],
-    /// Per-length multiplier `λ_{a,x} = (μ⁰ + μ¹)/h`.
+    pub active: [bool; 4],
+    /// Canonical duals of the rows, QP scaling (`h^{d−1}·λ` per row, SPEC §3).
+    pub mu: [f64; 4],
+    /// `λ = Σ μ / h^{d−1}`: per length in 2D (eq. 14), per area in 3D.
     pub lambda: f64,
 }
 
@@ -126,11 +141,12 @@ pub struct ConvergedDiagnostics {
     pub complementarity_raw: f64,
     /// Most negative raw dual (0 when all are ≥ 0).
     pub min_raw_dual: f64,
-    /// `‖λ‖_h = (Σ h λ_{a,x}²)^{1/2}`.
+    /// `‖λ‖_h = (Σ h^{d−1} λ²)^{1/2}` over the active pairs.
     pub lambda_norm_h: f64,
-    /// `C(φ_h) = max_a #{x : (a, x) active}` (Lemma 5.6).
+    /// `C(φ_h)`: 2D, `max_a #{x : (a, x) active}` (Lemma 5.6); 3D, the largest number of
+    /// active pairs sharing one contact element (a face, or an edge of an edge–edge pair).
     pub c_phi: usize,
-    /// `max_x #{a : (a, x) active}` (Remark 5.2: at most six in 2D).
+    /// `max_x #{a : (a, x) active}` (Remark 5.2: at most six in 2D); 3D: faces per vertex.
     pub max_edges_per_vertex: usize,
     /// `‖R‖_{H⁻¹} = (rᵀ G⁻¹ r)^{1/2}`, Lemma 5.6 residual with the canonical duals.
     pub residual_hm1: f64,
@@ -273,32 +289,29 @@ pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
     CscMatrix::from_triplets(nfree, nfree, &trip).expect("indices in range, values finite")
 }
 
-/// The gradient of a row `n·(φ(a_i) − φ(x))` as `(dof, value)` entries on the free dofs.
-fn row_gradient(r: &PointEdgeRow, i: usize, col: &[usize], out: &mut Vec<(usize, f64)>) {
+/// The gradient of row `i` of a pair, `n·(φ(p) − φ(q))`, as `(dof, value)` entries on the free
+/// dofs.
+fn row_gradient(r: &PairRows, i: usize, col: &[usize], out: &mut Vec<(usize, f64)>) {
     out.clear();
-    for c in 0..2 {
-        let ca = col[2 * r.edge[i] + c];
-        if ca != usize::MAX {
-            out.push((ca, r.n[c]));
+    let d = r.dim;
+    for c in 0..d {
+        let cp = col[d * r.plus[i] + c];
+        if cp != usize::MAX {
+            out.push((cp, r.n[c]));
         }
-        let cx = col[2 * r.pair.x + c];
-        if cx != usize::MAX {
-            out.push((cx, -r.n[c]));
+        let cm = col[d * r.minus[i] + c];
+        if cm != usize::MAX {
+            out.push((cm, -r.n[c]));
         }
     }
 }
 
 /// `g − Σ_r μ_r ∇row_r` on the free dofs.
-fn stationarity_vector(
-    g: &[f64],
-    rows: &[PointEdgeRow],
-    mu: &[[f64; 2]],
-    col: &[usize],
-) -> Vec<f64> {
+fn stationarity_vector(g: &[f64], rows: &[PairRows], mu: &[[f64; 4]], col: &[usize]) -> Vec<f64> {
     let mut s = g.to_vec();
     let mut buf = Vec::new();
     for (r, m) in rows.iter().zip(mu) {
-        for (i, &mi) in m.iter().enumerate() {
+        for (i, &mi) in m.iter().enumerate().take(r.len) {
             if mi != 0.0 {
                 row_gradient(r, i, col, &mut buf);
                 for &(k, v) in &buf {
@@ -311,13 +324,13 @@ fn stationarity_vector(
 }
 
 /// `‖J'(x) − Σ_r μ_r ∇row_r‖_∞` over the free dofs: the Lemma 5.4 stationarity residual of
-/// duals `mu` (two per row) with the sign of SPEC §3.
+/// duals `mu` (one per row of each pair) with the sign of SPEC §3.
 pub fn stationarity_residual(
     mesh: &Mesh,
     energy: &TotalEnergy,
     x: &[f64],
-    rows: &[PointEdgeRow],
-    mu: &[[f64; 2]],
+    rows: &[PairRows],
+    mu: &[[f64; 4]],
 ) -> f64 {
     let (col, nfree) = free_cols(mesh);
     let gfull = energy.gradient(x);
@@ -337,7 +350,7 @@ fn max_abs(v: &[f64]) -> f64 {
 /// Lemma 5.4 / 5.6 diagnostics at a converged configuration `x` (= φ_h) of a run whose last
 /// sub-problem had rows `last_rows` and duals `last_mult` (SPEC §3).
 ///
-/// * **Rows** of T(φ_h): every `point_edge` pair closer than `ε + active_tol + 1e-9·ε`, built at
+/// * **Rows** of T(φ_h): every contact pair closer than `ε + active_tol + 1e-9·ε`, built at
 ///   ψ = φ_h; a row is active when its value is at most `ε + active_tol`.
 /// * **Canonical duals** (SPEC §3, "Uniqueness"): with `A` the active rows' gradients and
 ///   `g = J'(φ_h)` on the free dofs, the duals minimize `½|Aᵀμ − g|² + ½τ|μ|²` over `μ ≥ 0`,
@@ -345,10 +358,11 @@ fn max_abs(v: &[f64]) -> f64 {
 ///   tends to the minimum-norm one of the stationarity set as τ → 0. It is solved as a QP by
 ///   `backend` (the caller picks it and its tolerance). Inactive rows get 0, so complementary
 ///   slackness holds by construction; the raw duals' complementarity is reported apart.
-/// * **Lemma 5.6**: `r = g − Σ (μ⁰ + μ¹)(α⁰∇row⁰ + α¹∇row¹)`, the nodal vector of
-///   `⟨R, φ̂⟩ = ⟨J'(φ_h), φ̂⟩ − Σ hλ n·(φ̂(p) − φ̂(x))`, and `‖R‖ = (rᵀG⁻¹r)^{1/2}` with the H¹
-///   Gram matrix `G` ([`h1_gram`], factorized by the sparse `LDLᵀ` also used by the Uzawa
-///   backend).
+/// * **Lemma 5.6**: `r = g − Σ_pairs (Σ_i μ_i)(Σ_i w_i ∇row_i)`, `w` the rows' barycentric
+///   weights, the nodal vector of `⟨R, φ̂⟩ = ⟨J'(φ_h), φ̂⟩ − Σ h^{d−1}λ n·(φ̂(p) − φ̂(q))` with
+///   `p`, `q` the pair's closest points, and `‖R‖ = (rᵀG⁻¹r)^{1/2}` with the H¹ Gram matrix `G`
+///   ([`h1_gram`], factorized by the sparse `LDLᵀ` also used by the Uzawa backend). In 3D the
+///   same quantities with per-area λ; the paper proves the bound in 2D only.
 #[allow(clippy::too_many_arguments)] // the run's state, its last sub-problem and the QP solver
 pub fn converged_diagnostics(
     mesh: &Mesh,
@@ -356,8 +370,8 @@ pub fn converged_diagnostics(
     x: &[f64],
     eps: f64,
     h: f64,
-    last_rows: &[PointEdgeRow],
-    last_mult: &[[f64; 2]],
+    last_rows: &[PairRows],
+    last_mult: &[[f64; 4]],
     backend: &mut dyn QpBackend,
     settings: &DiagnosticSettings,
 ) -> Result<ConvergedDiagnostics, DiagnosticsError> {
@@ -377,7 +391,7 @@ pub fn converged_diagnostics(
     let mut min_raw_dual = 0.0f64;
     for (r, m) in last_rows.iter().zip(last_mult) {
         let v = r.values(x);
-        for i in 0..2 {
+        for i in 0..r.len {
             complementarity_raw = complementarity_raw.max(m[i] * (v[i] - eps).abs());
             min_raw_dual = min_raw_dual.min(m[i]);
         }
@@ -385,17 +399,13 @@ pub fn converged_diagnostics(
 
     // Rows of T(φ_h) near contact.
     let reach = eps + settings.active_tol + 1e-9 * eps;
-    let near: Vec<PointEdgePair> =
-        point_edge_near(mesh, x, &[], &vec![reach; mesh.edges.len()], true)
-            .into_iter()
-            .map(|p| p.pair)
-            .collect();
-    let rows = point_edge_rows(mesh, x, &near).ok_or(DiagnosticsError::ZeroDistance)?;
-    let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row 0|1)
-    let mut active_flags = vec![[false; 2]; rows.len()];
+    let near = near_pairs(mesh, x, reach, true);
+    let rows = rows_for(mesh, x, &near).ok_or(DiagnosticsError::ZeroDistance)?;
+    let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row)
+    let mut active_flags = vec![[false; 4]; rows.len()];
     for (k, r) in rows.iter().enumerate() {
         let v = r.values(x);
-        for i in 0..2 {
+        for i in 0..r.len {
             if v[i] - eps <= settings.active_tol {
                 active_idx.push((k, i));
                 active_flags[k][i] = true;
@@ -405,7 +415,7 @@ pub fn converged_diagnostics(
 
     // Canonical duals: min ½|Aᵀμ − g|² + ½τ|μ|², μ ≥ 0, as a QP in μ.
     let m = active_idx.len();
-    let mut mu = vec![[0.0f64; 2]; rows.len()];
+    let mut mu = vec![[0.0f64; 4]; rows.len()];
     let mut dual_qp_status = "solved";
     if m > 0 {
         // Column lists of Aᵀ: for each free dof, the active rows touching it.
@@ -465,43 +475,61 @@ pub fn converged_diagnostics(
 
     // Pairs, λ, counts.
     let mut pairs = Vec::new();
-    let mut per_edge: HashMap<usize, usize> = HashMap::new();
+    // per contact element (0: edge, 1: face) and per vertex
+    let mut per_element: HashMap<(u8, usize), usize> = HashMap::new();
     let mut per_vertex: HashMap<usize, usize> = HashMap::new();
     let mut lambda_sq = 0.0;
+    // h^{d−1}: λ per length in 2D, per area in 3D (eq. 14)
+    let hd = if mesh.dim == 2 { h } else { h * h };
     for (k, r) in rows.iter().enumerate() {
-        if !(active_flags[k][0] || active_flags[k][1]) {
+        if !active_flags[k].iter().any(|&a| a) {
             continue;
         }
-        *per_edge.entry(r.pair.a).or_insert(0) += 1;
-        *per_vertex.entry(r.pair.x).or_insert(0) += 1;
-        let lambda = (mu[k][0] + mu[k][1]) / h;
-        lambda_sq += h * lambda * lambda;
+        match r.pair {
+            ContactPair::PointEdge { x, a } => {
+                *per_element.entry((0, a)).or_insert(0) += 1;
+                *per_vertex.entry(x).or_insert(0) += 1;
+            }
+            ContactPair::VertexTriangle { x, t } => {
+                *per_element.entry((1, t)).or_insert(0) += 1;
+                *per_vertex.entry(x).or_insert(0) += 1;
+            }
+            ContactPair::EdgeEdge { a, b } => {
+                *per_element.entry((0, a)).or_insert(0) += 1;
+                *per_element.entry((0, b)).or_insert(0) += 1;
+            }
+        }
+        let lambda = mu[k].iter().take(r.len).fold(0.0, |s, m| s + m) / hd;
+        lambda_sq += hd * lambda * lambda;
+        let (first, second) = r.pair.indices();
         pairs.push(PairMultiplier {
-            x: r.pair.x,
-            a: r.pair.a,
+            kind: r.pair.kind(),
+            first,
+            second,
+            rows: r.len,
             distance: r.distance,
-            alpha: r.alpha,
+            weight: r.weight,
             active: active_flags[k],
             mu: mu[k],
             lambda,
         });
     }
-    let c_phi = per_edge.values().copied().max().unwrap_or(0);
+    let c_phi = per_element.values().copied().max().unwrap_or(0);
     let max_edges_per_vertex = per_vertex.values().copied().max().unwrap_or(0);
     let lambda_norm_h = lambda_sq.sqrt();
 
-    // Lemma 5.6 residual: r = g − Σ (μ⁰+μ¹)(α⁰∇row⁰ + α¹∇row¹).
+    // Lemma 5.6 residual: r = g − Σ (Σ_i μ_i)(Σ_i w_i ∇row_i).
     let mut rvec = g.clone();
     let mut buf = Vec::new();
     for (k, r) in rows.iter().enumerate() {
-        let s = mu[k][0] + mu[k][1];
+        let s = mu[k].iter().take(r.len).fold(0.0, |s, m| s + m);
         if s == 0.0 {
             continue;
         }
-        for i in 0..2 {
+        for i in 0..r.len {
             row_gradient(r, i, &col, &mut buf);
             for &(d, v) in &buf {
-                rvec[d] -= s * r.alpha[i] * v;
+                rvec[d] -= s * r.weight[i] * v;
             }
         }
     }

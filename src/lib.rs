@@ -17,6 +17,7 @@
 pub mod broad_phase;
 pub mod bvh;
 pub mod capture;
+pub mod contact;
 pub mod diagnostics;
 pub mod energy;
 pub mod geometry;

@@ -5,7 +5,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use contactlab::broad_phase::point_edge_near;
+use contactlab::contact::near_pairs;
 use contactlab::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
 use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
@@ -293,7 +293,15 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             hist.flush()?;
             if rec.iteration.is_multiple_of(a.frame_every.max(1)) {
                 let name = format!("frame_{:05}.vtu", rec.iteration);
-                write_vtu(&frames.join(&name), 2, x, &mesh.edges, &mesh.triangles, &[])?;
+                write_vtu(
+                    &frames.join(&name),
+                    mesh.dim,
+                    x,
+                    &mesh.edges,
+                    vtk_triangles(mesh),
+                    &mesh.tets,
+                    &[],
+                )?;
                 pvd.push(rec.iteration as f64, format!("frames/{name}"));
                 pvd.write(&out.join("frames.pvd"))?;
                 last_frame = rec.iteration;
@@ -334,25 +342,17 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         let name = format!("frame_{:05}.vtu", res.outer_iterations);
         write_vtu(
             &frames.join(&name),
-            2,
+            mesh.dim,
             &res.x,
             &mesh.edges,
-            &mesh.triangles,
+            vtk_triangles(mesh),
+            &mesh.tets,
             &[],
         )?;
         pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
         pvd.write(&out.join("frames.pvd"))?;
     }
-    let near: Vec<_> = point_edge_near(
-        mesh,
-        &res.x,
-        &[],
-        &vec![1.01 * scene.eps; mesh.edges.len()],
-        false,
-    )
-    .into_iter()
-    .map(|p| p.pair)
-    .collect();
+    let near = near_pairs(mesh, &res.x, 1.01 * scene.eps, false);
     let pattern = contact_pattern(mesh, &res.x, &near, scene.eps);
     let names: Vec<[String; 2]> = pattern
         .iter()
@@ -459,33 +459,64 @@ fn run_cmd(a: RunArgs) -> Result<()> {
     Ok(())
 }
 
-/// One row of `multipliers.csv`: an active pair at the fixed point.
+/// The triangles a VTK frame shows: the solid elements in 2D, the contact faces in 3D (the
+/// surfaces' triangles and the solids' boundary).
+fn vtk_triangles(mesh: &contactlab::mesh::Mesh) -> &[[usize; 3]] {
+    if mesh.dim == 3 {
+        &mesh.faces
+    } else {
+        &mesh.triangles
+    }
+}
+
+/// One row of `multipliers.csv`: an active pair at the fixed point. Unused row slots (a
+/// point–edge pair has 2 rows, vertex–triangle 3, edge–edge 4) are empty.
 #[derive(serde::Serialize)]
 struct PairRow {
-    vertex: usize,
-    edge: usize,
+    kind: &'static str,
+    first: usize,
+    second: usize,
+    rows: usize,
     distance: f64,
-    alpha0: f64,
-    alpha1: f64,
-    active0: bool,
-    active1: bool,
-    mu0: f64,
-    mu1: f64,
+    w0: Option<f64>,
+    w1: Option<f64>,
+    w2: Option<f64>,
+    w3: Option<f64>,
+    active0: Option<bool>,
+    active1: Option<bool>,
+    active2: Option<bool>,
+    active3: Option<bool>,
+    mu0: Option<f64>,
+    mu1: Option<f64>,
+    mu2: Option<f64>,
+    mu3: Option<f64>,
     lambda: f64,
 }
 
 impl From<&PairMultiplier> for PairRow {
     fn from(p: &PairMultiplier) -> Self {
+        let n = p.rows;
+        let w = |i: usize| (i < n).then_some(p.weight[i]);
+        let a = |i: usize| (i < n).then_some(p.active[i]);
+        let m = |i: usize| (i < n).then_some(p.mu[i]);
         PairRow {
-            vertex: p.x,
-            edge: p.a,
+            kind: p.kind,
+            first: p.first,
+            second: p.second,
+            rows: n,
             distance: p.distance,
-            alpha0: p.alpha[0],
-            alpha1: p.alpha[1],
-            active0: p.active[0],
-            active1: p.active[1],
-            mu0: p.mu[0],
-            mu1: p.mu[1],
+            w0: w(0),
+            w1: w(1),
+            w2: w(2),
+            w3: w(3),
+            active0: a(0),
+            active1: a(1),
+            active2: a(2),
+            active3: a(3),
+            mu0: m(0),
+            mu1: m(1),
+            mu2: m(2),
+            mu3: m(3),
             lambda: p.lambda,
         }
     }

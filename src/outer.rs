@@ -4,11 +4,15 @@
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an observer
 //! callback, which writes CSV, frames or a progress line.
 
-use crate::broad_phase::{min_distance_near, point_edge_near};
+use crate::broad_phase::point_edge_near;
+use crate::contact::{
+    all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
+    PairRows,
+};
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;
-use crate::pairs::{point_edge_pairs, MinDistance, PointEdgePair};
-use crate::rows::{point_edge_row, point_edge_rows, PointEdgeRow};
+use crate::pairs::MinDistance;
+use crate::subproblem::row_offsets;
 use crate::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
@@ -20,13 +24,15 @@ use thiserror::Error;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Pruning {
-    /// Every `point_edge` pair with a free vertex (the paper-faithful reference, O(N²) rows).
+    /// Every pair of disjoint contact elements with a free vertex (the paper-faithful
+    /// reference, O(N²) rows): point–edge in 2D, vertex–face and edge–edge in 3D.
     AllPairs,
     /// A working set grown until the sub-problem's solution satisfies every row of the full
     /// T(ψ) (checked through the broad phase with margin ε + 2D): the same iterates as
     /// all-pairs.
     Lazy,
-    /// A box `|φ(v) − ψ(v)|∞ ≤ δ` and rows only for pairs closer than `ε + 2√2·δ`; δ adapts.
+    /// A box `|φ(v) − ψ(v)|∞ ≤ δ` and rows only for pairs closer than `ε + 2√d·δ` (d the
+    /// dimension); δ adapts.
     TrustRegion,
 }
 
@@ -152,7 +158,7 @@ pub struct IterationRecord {
     pub admissible: bool,
     /// Candidate pairs (pairs given rows).
     pub pairs: usize,
-    /// Rows of T(φ_{k-1}) (two per pair).
+    /// Rows of T(φ_{k-1}) (two per pair in 2D; three or four per pair in 3D).
     pub rows: usize,
     /// Rows active at φ_k (value within the margin of ε).
     pub active_rows: usize,
@@ -215,10 +221,10 @@ pub struct RunResult {
     pub energy: f64,
     /// Exact minimum distance at φ.
     pub min_distance: MinDistance,
-    /// Rows of the last T(ψ) and their multipliers (`μ ≥ 0`, two per pair).
-    pub last_rows: Vec<PointEdgeRow>,
-    /// Multipliers of the last sub-problem.
-    pub multipliers: Vec<[f64; 2]>,
+    /// Rows of the last T(ψ), grouped by pair.
+    pub last_rows: Vec<PairRows>,
+    /// Multipliers of the last sub-problem (`μ ≥ 0`, one per row of each pair).
+    pub multipliers: Vec<[f64; 4]>,
     /// Wall time of the whole loop.
     pub wall_time_s: f64,
 }
@@ -239,7 +245,13 @@ pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
     let mut l: Vec<f64> = mesh
         .edges
         .iter()
-        .map(|e| (Mesh::p2(x, e[0]) - Mesh::p2(x, e[1])).norm())
+        .map(|e| {
+            if mesh.dim == 2 {
+                (Mesh::p2(x, e[0]) - Mesh::p2(x, e[1])).norm()
+            } else {
+                (mesh.point(x, e[0]) - mesh.point(x, e[1])).norm()
+            }
+        })
         .collect();
     if l.is_empty() {
         return 0.0;
@@ -248,43 +260,43 @@ pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
     *l.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// Per-vertex Euclidean displacement `|y(v) − x(v)|`.
-fn displacements(x: &[f64], y: &[f64]) -> Vec<f64> {
-    x.chunks(2)
-        .zip(y.chunks(2))
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .collect()
-}
-
-/// The lazy-row oracle at ψ (see [`RowOracle`]): a row of T(ψ) moves by at most
-/// `D_x + max(D_a0, D_a1)` from its value at ψ, which is at least `dist(ψ(x), ψ(a))`, with
-/// `D_v = |φ(v) − ψ(v)|`; so only pairs closer than `ε + δ + D_x + D_a` at ψ can be violated by
-/// φ. The broad phase finds exactly those, and the rows below `ε + δ` at φ are returned.
+/// The lazy-row oracle at ψ (see [`RowOracle`]): a row `n·(φ(p) − φ(q))` of T(ψ) moves by at
+/// most `D_p + D_q` from its value at ψ, which is at least the pair's distance at ψ, with
+/// `D_v = |φ(v) − ψ(v)|`. In 2D (point–edge rows) only pairs closer than
+/// `ε + δ + D_x + max(D_a0, D_a1)` at ψ can be violated by φ, and the broad phase finds exactly
+/// those (per-vertex and per-edge radii); in 3D the radius is uniform,
+/// `ε + δ + 2 max_v D_v`. The rows below `ε + δ` at φ are returned.
 fn lazy_oracle<'a>(
     mesh: &'a Mesh,
     psi: &'a [f64],
     eps_qp: f64,
-) -> impl FnMut(&[f64], &[PointEdgeRow]) -> Vec<PointEdgeRow> + 'a {
-    let mut carried: HashSet<PointEdgePair> = HashSet::new();
-    move |phi: &[f64], rows: &[PointEdgeRow]| {
+) -> impl FnMut(&[f64], &[PairRows]) -> Vec<PairRows> + 'a {
+    let mut carried: HashSet<ContactPair> = HashSet::new();
+    move |phi: &[f64], rows: &[PairRows]| {
         if carried.len() != rows.len() {
             carried = rows.iter().map(|r| r.pair).collect();
         }
-        let disp = displacements(psi, phi);
-        let rv: Vec<f64> = disp.iter().map(|d| d * (1.0 + 1e-12) + eps_qp).collect();
-        let re: Vec<f64> = mesh
-            .edges
-            .iter()
-            .map(|e| disp[e[0]].max(disp[e[1]]) * (1.0 + 1e-12))
-            .collect();
-        let added: Vec<PointEdgeRow> = point_edge_near(mesh, psi, &rv, &re, true)
+        let disp = displacements(mesh.dim, psi, phi);
+        let candidates: Vec<ContactPair> = if mesh.dim == 2 {
+            let rv: Vec<f64> = disp.iter().map(|d| d * (1.0 + 1e-12) + eps_qp).collect();
+            let re: Vec<f64> = mesh
+                .edges
+                .iter()
+                .map(|e| disp[e[0]].max(disp[e[1]]) * (1.0 + 1e-12))
+                .collect();
+            point_edge_near(mesh, psi, &rv, &re, true)
+                .into_iter()
+                .map(|p| p.pair.into())
+                .collect()
+        } else {
+            let dmax = disp.iter().fold(0.0f64, |m, &d| m.max(d));
+            near_pairs(mesh, psi, eps_qp + 2.0 * dmax * (1.0 + 1e-12), true)
+        };
+        let added: Vec<PairRows> = candidates
             .par_iter()
-            .filter(|p| !carried.contains(&p.pair))
-            .filter_map(|p| point_edge_row(mesh, psi, p.pair))
-            .filter(|r| {
-                let v = r.values(phi);
-                v[0].min(v[1]) < eps_qp
-            })
+            .filter(|p| !carried.contains(p))
+            .filter_map(|&p| pair_rows(mesh, psi, p))
+            .filter(|r| r.min_value(phi) < eps_qp)
             .collect();
         carried.extend(added.iter().map(|r| r.pair));
         added
@@ -307,7 +319,7 @@ pub fn run(
     let start = Instant::now();
     let t0 = Instant::now();
     // The start is checked over every disjoint pair, the all-fixed ones included (once).
-    let md0 = min_distance_near(mesh, x0, 2.0 * eps, false);
+    let md0 = min_distance(mesh, x0, 2.0 * eps, false);
     if md0.distance < eps {
         return Err(RunError::InadmissibleStart {
             pair: md0.pair.to_string(),
@@ -315,8 +327,8 @@ pub fn run(
             eps,
         });
     }
-    let all_pairs: Vec<PointEdgePair> = if settings.pruning == Pruning::AllPairs {
-        point_edge_pairs(mesh).0
+    let all_pairs: Vec<ContactPair> = if settings.pruning == Pruning::AllPairs {
+        all_movable_pairs(mesh)
     } else {
         Vec::new()
     };
@@ -365,34 +377,33 @@ pub fn run(
     };
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
     let eps_qp = eps + margin;
-    let ne = mesh.edges.len();
     // The last sub-problem's multipliers by pair: the next step's warm start.
-    let mut last_mult: HashMap<PointEdgePair, [f64; 2]> = HashMap::new();
+    let mut last_mult: HashMap<ContactPair, [f64; 4]> = HashMap::new();
+    // Inside the box |φ − ψ|∞ ≤ δ a vertex moves by at most √d·δ, a row by twice that.
+    let box_reach = if mesh.dim == 2 {
+        2.0 * std::f64::consts::SQRT_2
+    } else {
+        2.0 * 3f64.sqrt()
+    };
     for k in 1..=settings.max_outer {
         let tp = Instant::now();
         // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
         // never given rows).
-        let pairs: Vec<PointEdgePair> = match settings.pruning {
+        let pairs: Vec<ContactPair> = match settings.pruning {
             Pruning::AllPairs => all_pairs.clone(),
             // Start from the pairs that the last step's displacement could reach, within
             // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
             Pruning::Lazy => {
                 let r = eps_qp + d_prev.min(settings.lazy_start * hbar);
-                point_edge_near(mesh, &x, &[], &vec![r; ne], true)
-                    .into_iter()
-                    .map(|p| p.pair)
-                    .collect()
+                near_pairs(mesh, &x, r, true)
             }
-            // Inside the box a row moves by at most 2√2·δ: farther pairs cannot be violated.
+            // Inside the box a row moves by at most 2√d·δ: farther pairs cannot be violated.
             Pruning::TrustRegion => {
-                let r = eps_qp + 2.0 * std::f64::consts::SQRT_2 * delta * (1.0 + 1e-9);
-                point_edge_near(mesh, &x, &[], &vec![r; ne], true)
-                    .into_iter()
-                    .map(|p| p.pair)
-                    .collect()
+                let r = eps_qp + box_reach * delta * (1.0 + 1e-9);
+                near_pairs(mesh, &x, r, true)
             }
         };
-        let rows0 = point_edge_rows(mesh, &x, &pairs).expect("admissible ψ has positive distances");
+        let rows0 = rows_for(mesh, &x, &pairs).expect("admissible ψ has positive distances");
         let t_pairs_s = tp.elapsed().as_secs_f64();
         let trust =
             (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: &x, delta });
@@ -422,7 +433,7 @@ pub fn run(
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
         let tc = Instant::now();
-        let md = min_distance_near(mesh, &sub.y, 2.0 * eps, true);
+        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
         let t_check = tc.elapsed().as_secs_f64();
         let active_rows = sub
             .rows
@@ -430,6 +441,7 @@ pub fn run(
             .map(|r| {
                 r.values(&sub.y)
                     .iter()
+                    .take(r.len)
                     .filter(|&&v| v - eps <= 2.0 * margin)
                     .count()
             })
@@ -441,7 +453,7 @@ pub fn run(
                 min_distance: md.distance,
                 admissible: md.distance >= eps - roundoff,
                 pairs: sub.rows.len(),
-                rows: 2 * sub.rows.len(),
+                rows: row_offsets(&sub.rows).1,
                 active_rows,
                 lazy_rounds: sub.lazy_rounds,
                 trust_delta: if settings.pruning == Pruning::TrustRegion {
@@ -468,7 +480,7 @@ pub fn run(
             break;
         }
         let jprev = jx;
-        d_prev = displacements(&x, &sub.y)
+        d_prev = displacements(mesh.dim, &x, &sub.y)
             .into_iter()
             .fold(0.0, f64::max)
             .max(1e-3 * hbar);

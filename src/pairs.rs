@@ -62,6 +62,33 @@ pub enum ClosestPair {
         /// Second edge.
         b: usize,
     },
+    /// 3D: vertex `x` and contact face `t` (vertices `face`).
+    VertexTriangle {
+        /// Vertex.
+        x: usize,
+        /// Face index.
+        t: usize,
+        /// The face's vertices.
+        face: [usize; 3],
+    },
+    /// 3D: two disjoint contact edges.
+    Segments {
+        /// First edge.
+        a: usize,
+        /// Second edge.
+        b: usize,
+        /// First edge's vertices.
+        ea: [usize; 2],
+        /// Second edge's vertices.
+        eb: [usize; 2],
+    },
+    /// 3D: contact edge `a` passes through contact face `t` (distance 0).
+    EdgeThroughFace {
+        /// Edge.
+        a: usize,
+        /// Face.
+        t: usize,
+    },
     /// The mesh has no disjoint pair.
     None,
 }
@@ -73,6 +100,18 @@ impl std::fmt::Display for ClosestPair {
                 write!(f, "vertex {x} and edge {a} = [{a0}, {a1}]")
             }
             ClosestPair::EdgeEdge { a, b } => write!(f, "edges {a} and {b} (they cross)"),
+            ClosestPair::VertexTriangle { x, t, face } => {
+                write!(f, "vertex {x} and face {t} = {face:?}")
+            }
+            ClosestPair::Segments { a, b, ea, eb } => {
+                write!(f, "edge {a} = {ea:?} and edge {b} = {eb:?}")
+            }
+            ClosestPair::EdgeThroughFace { a, t } => {
+                write!(
+                    f,
+                    "edge {a} and face {t} (the edge passes through the face)"
+                )
+            }
             ClosestPair::None => write!(f, "no disjoint pair"),
         }
     }

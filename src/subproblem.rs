@@ -6,7 +6,7 @@
 //! stays sparse. The QP
 //!
 //! ```text
-//!     min q(d)   s.t.   n·(d(a_i) − d(x)) ≥ ε + δ − n·(y(a_i) − y(x))   for every row of T(ψ)
+//!     min q(d)   s.t.   n·(d(p) − d(q)) ≥ ε + δ − n·(y(p) − y(q))   for every row of T(ψ)
 //! ```
 //!
 //! over the free degrees of freedom goes to the backend; then a backtracking (Armijo) line
@@ -22,10 +22,9 @@
 //!   tolerance cannot push an iterate below ε. Every accepted point is checked against the
 //!   exact rows `≥ ε` of T(ψ).
 
+use crate::contact::{ContactPair, PairRows};
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;
-use crate::pairs::PointEdgePair;
-use crate::rows::{min_slack, PointEdgeRow};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -85,9 +84,10 @@ pub struct SubproblemResult {
     /// The line search could not decrease J along the last direction.
     pub line_search_failed: bool,
     /// The rows the last QP carried (the given ones, then those a [`RowOracle`] added).
-    pub rows: Vec<PointEdgeRow>,
-    /// Contact multipliers of the last QP, two per row pair (`μ = −y_QP ≥ 0`).
-    pub multipliers: Vec<[f64; 2]>,
+    pub rows: Vec<PairRows>,
+    /// Contact multipliers of the last QP, one per row of each pair (`μ = −y_QP ≥ 0`; entries
+    /// past the pair's `len` are 0).
+    pub multipliers: Vec<[f64; 4]>,
     /// QP re-solves because the oracle added rows (lazy rows).
     pub lazy_rounds: usize,
     /// Seconds spent in the oracle (pair search for lazy rows).
@@ -132,16 +132,33 @@ pub struct TrustBox<'a> {
     pub delta: f64,
 }
 
-/// Builds the QP of one inner step at `y`. Returns the QP (rows: first two per contact pair,
+/// Smallest row value minus ε over all rows at `phi` (≥ 0 iff φ ∈ T(ψ)).
+pub fn min_slack(rows: &[PairRows], phi: &[f64], eps: f64) -> f64 {
+    rows.iter()
+        .map(|r| r.min_value(phi) - eps)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The QP row index of the first row of each pair (`offsets[r]`), and the total.
+pub fn row_offsets(rows: &[PairRows]) -> (Vec<usize>, usize) {
+    let mut off = Vec::with_capacity(rows.len());
+    let mut k = 0;
+    for r in rows {
+        off.push(k);
+        k += r.len;
+    }
+    (off, k)
+}
+
+/// Builds the QP of one inner step at `y`. Returns the QP (rows: first those of each contact pair,
 /// then one equality row per rank-one term, then one box row per free dof when `trust` is
 /// given) and the gradient `∇J(y)` it used.
-#[allow(clippy::needless_range_loop)] // i indexes the row and the edge vertex together
 #[allow(clippy::too_many_arguments)]
 pub fn build_qp(
     mesh: &Mesh,
     energy: &TotalEnergy,
     dofs: &DofMap,
-    rows: &[PointEdgeRow],
+    rows: &[PairRows],
     y: &[f64],
     eps_qp: f64,
     trust: Option<TrustBox>,
@@ -179,33 +196,35 @@ pub fn build_qp(
         }
     }
     let nbox = if trust.is_some() { nf } else { 0 };
-    let m = 2 * rows.len() + naux + nbox;
-    let mut atrip: Vec<(usize, usize, f64)> = Vec::with_capacity(12 * rows.len() + nbox);
+    let (offsets, ncontact) = row_offsets(rows);
+    let m = ncontact + naux + nbox;
+    let dim = mesh.dim;
+    let mut atrip: Vec<(usize, usize, f64)> = Vec::with_capacity(2 * dim * ncontact + nbox);
     let mut l = vec![0.0; m];
     let mut u = vec![f64::INFINITY; m];
-    for v in u.iter_mut().skip(2 * rows.len()).take(naux) {
+    for v in u.iter_mut().skip(ncontact).take(naux) {
         *v = 0.0;
     }
-    let dim = mesh.dim;
-    for (r, row) in rows.iter().enumerate() {
+    #[allow(clippy::needless_range_loop)] // i indexes the values and the row's vertices
+    for (row, &off) in rows.iter().zip(&offsets) {
         let vals = row.values(y);
-        for i in 0..2 {
-            let ri = 2 * r + i;
+        for i in 0..row.len {
+            let ri = off + i;
             l[ri] = eps_qp - vals[i];
             for c in 0..dim {
-                let cx = dofs.col[dim * row.pair.x + c];
-                if cx != usize::MAX {
-                    atrip.push((ri, cx, -row.n[c]));
+                let cm = dofs.col[dim * row.minus[i] + c];
+                if cm != usize::MAX {
+                    atrip.push((ri, cm, -row.n[c]));
                 }
-                let ca = dofs.col[dim * row.edge[i] + c];
-                if ca != usize::MAX {
-                    atrip.push((ri, ca, row.n[c]));
+                let cp = dofs.col[dim * row.plus[i] + c];
+                if cp != usize::MAX {
+                    atrip.push((ri, cp, row.n[c]));
                 }
             }
         }
     }
     for (k, r) in h.rank_one.iter().enumerate() {
-        let ri = 2 * rows.len() + k;
+        let ri = ncontact + k;
         atrip.push((ri, nf + k, 1.0));
         for &(dof, w) in &r.w {
             let c = dofs.col[dof];
@@ -215,7 +234,7 @@ pub fn build_qp(
         }
     }
     if let Some(tb) = trust {
-        let base = 2 * rows.len() + naux;
+        let base = ncontact + naux;
         for (dof, &c) in dofs.col.iter().enumerate() {
             if c != usize::MAX {
                 let off = tb.psi[dof] - y[dof];
@@ -231,7 +250,7 @@ pub fn build_qp(
 
 /// Lazy rows: given a trial point and the rows carried so far, returns the rows of T(ψ) that
 /// the trial point violates (value below the QP level `ε + δ`) and that are not carried yet.
-pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PointEdgeRow]) -> Vec<PointEdgeRow>;
+pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PairRows]) -> Vec<PairRows>;
 
 /// Minimizes J over the rows `rows` of T(ψ) (and the box `trust`, if given) starting from
 /// `start`, which must satisfy every row of T(ψ) (`≥ ε`) and the box.
@@ -245,12 +264,12 @@ pub fn solve_subproblem(
     mesh: &Mesh,
     energy: &TotalEnergy,
     dofs: &DofMap,
-    rows: Vec<PointEdgeRow>,
+    rows: Vec<PairRows>,
     start: &[f64],
     eps: f64,
     trust: Option<TrustBox>,
     mut oracle: Option<RowOracle>,
-    warm_pairs: Option<&HashMap<PointEdgePair, [f64; 2]>>,
+    warm_pairs: Option<&HashMap<ContactPair, [f64; 4]>>,
     backend: &mut dyn QpBackend,
     settings: &InnerSettings,
 ) -> Result<SubproblemResult, QpError> {
@@ -284,10 +303,12 @@ pub fn solve_subproblem(
                 // First QP of the outer step: the last step's multipliers, by pair.
                 warm = warm_pairs.map(|map| {
                     let mut yw = vec![0.0; qp.m()];
-                    for (r, row) in rows.iter().enumerate() {
+                    let (offsets, _) = row_offsets(&rows);
+                    for (row, &off) in rows.iter().zip(&offsets) {
                         if let Some(mu) = map.get(&row.pair) {
-                            yw[2 * r] = -mu[0];
-                            yw[2 * r + 1] = -mu[1];
+                            for i in 0..row.len {
+                                yw[off + i] = -mu[i];
+                            }
                         }
                     }
                     WarmStart {
@@ -323,12 +344,12 @@ pub fn solve_subproblem(
                 res.t_pairs_s += tp.elapsed().as_secs_f64();
                 if !added.is_empty() {
                     // Keep this QP's duals for the carried rows; the new rows start at 0.
-                    let old = 2 * rows.len();
+                    let old = row_offsets(&rows).1;
                     rows.extend(added);
                     res.lazy_rounds += 1;
                     warm = settings.warm_start.then(|| {
                         let mut yw = sol.y[..old].to_vec();
-                        yw.resize(2 * rows.len(), 0.0);
+                        yw.resize(row_offsets(&rows).1, 0.0);
                         yw.extend_from_slice(&sol.y[old..]);
                         WarmStart {
                             x: Vec::new(),
@@ -340,8 +361,17 @@ pub fn solve_subproblem(
             }
             break (sol, qp, g, d);
         };
-        res.multipliers = (0..rows.len())
-            .map(|r| [-sol.y[2 * r], -sol.y[2 * r + 1]])
+        let (offsets, _) = row_offsets(&rows);
+        res.multipliers = rows
+            .iter()
+            .zip(&offsets)
+            .map(|(row, &off)| {
+                let mut mu = [0.0; 4];
+                for (i, m) in mu.iter_mut().enumerate().take(row.len) {
+                    *m = -sol.y[off + i];
+                }
+                mu
+            })
             .collect();
         let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
         if slope >= 0.0 {
@@ -383,7 +413,7 @@ pub fn solve_subproblem(
         }
     }
     if res.multipliers.len() != rows.len() {
-        res.multipliers = vec![[0.0; 2]; rows.len()];
+        res.multipliers = vec![[0.0; 4]; rows.len()];
     }
     res.rows = rows;
     res.y = y;

@@ -106,9 +106,9 @@ fn the_papers_printed_sign_is_not_stationary() {
     .unwrap();
     let (m, e, x) = (&scene.mesh, &scene.energy, &res.x);
     let plus = stationarity_residual(m, e, x, &res.last_rows, &res.multipliers);
-    let minus_mu: Vec<[f64; 2]> = res.multipliers.iter().map(|u| [-u[0], -u[1]]).collect();
+    let minus_mu: Vec<[f64; 4]> = res.multipliers.iter().map(|u| u.map(|v| -v)).collect();
     let minus = stationarity_residual(m, e, x, &res.last_rows, &minus_mu);
-    let zero = stationarity_residual(m, e, x, &res.last_rows, &vec![[0.0; 2]; minus_mu.len()]);
+    let zero = stationarity_residual(m, e, x, &res.last_rows, &vec![[0.0; 4]; minus_mu.len()]);
     assert!(
         plus < 1e-6 * zero,
         "SPEC sign: {plus:.3e} vs |J'| = {zero:.3e}"

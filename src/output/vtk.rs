@@ -11,10 +11,14 @@ use super::write_atomic;
 pub const VTK_LINE: u8 = 3;
 /// VTK cell type id of a three-node triangle.
 pub const VTK_TRIANGLE: u8 = 5;
+/// VTK cell type id of a four-node (linear) tetrahedron.
+pub const VTK_TETRA: u8 = 10;
 /// Value of the `kind` cell array for edges.
 pub const KIND_EDGE: i32 = 1;
 /// Value of the `kind` cell array for triangles.
 pub const KIND_TRIANGLE: i32 = 2;
+/// Value of the `kind` cell array for tetrahedra.
+pub const KIND_TET: i32 = 3;
 
 fn invalid(msg: String) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg)
@@ -51,13 +55,15 @@ fn fmt_f64(v: f64) -> String {
 /// Renders the `.vtu` document (see [`write_vtu`]) as a string.
 ///
 /// Errors (`InvalidInput`) if `dim` is not 2 or 3, if `x.len()` is not a
-/// multiple of `dim`, if a cell references a non-existent point, or if a point
-/// data array does not have one value per point.
+/// multiple of `dim`, if a cell (edge, triangle or tet; the message names its
+/// index) references a non-existent point, or if a point data array does not
+/// have one value per point.
 pub fn vtu_string(
     dim: usize,
     x: &[f64],
     edges: &[[usize; 2]],
     triangles: &[[usize; 3]],
+    tets: &[[usize; 4]],
     point_data: &[(&str, &[f64])],
 ) -> io::Result<String> {
     if dim != 2 && dim != 3 {
@@ -70,7 +76,7 @@ pub fn vtu_string(
         )));
     }
     let n_points = x.len() / dim;
-    let n_cells = edges.len() + triangles.len();
+    let n_cells = edges.len() + triangles.len() + tets.len();
     for (k, e) in edges.iter().enumerate() {
         if e.iter().any(|&i| i >= n_points) {
             return Err(invalid(format!(
@@ -82,6 +88,13 @@ pub fn vtu_string(
         if t.iter().any(|&i| i >= n_points) {
             return Err(invalid(format!(
                 "write_vtu: triangle {k} = {t:?} references a point >= {n_points}"
+            )));
+        }
+    }
+    for (k, t) in tets.iter().enumerate() {
+        if t.iter().any(|&i| i >= n_points) {
+            return Err(invalid(format!(
+                "write_vtu: tet {k} = {t:?} references a point >= {n_points}"
             )));
         }
     }
@@ -134,6 +147,7 @@ pub fn vtu_string(
         &mut s,
         std::iter::repeat_n(KIND_EDGE, edges.len())
             .chain(std::iter::repeat_n(KIND_TRIANGLE, triangles.len()))
+            .chain(std::iter::repeat_n(KIND_TET, tets.len()))
             .map(|k| k.to_string()),
         20,
     );
@@ -167,11 +181,15 @@ pub fn vtu_string(
     for t in triangles {
         let _ = writeln!(s, "          {} {} {}", t[0], t[1], t[2]);
     }
+    for t in tets {
+        let _ = writeln!(s, "          {} {} {} {}", t[0], t[1], t[2], t[3]);
+    }
     s.push_str("        </DataArray>\n");
     s.push_str("        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
     let offsets = (1..=edges.len())
         .map(|k| 2 * k)
-        .chain((1..=triangles.len()).map(|k| 2 * edges.len() + 3 * k));
+        .chain((1..=triangles.len()).map(|k| 2 * edges.len() + 3 * k))
+        .chain((1..=tets.len()).map(|k| 2 * edges.len() + 3 * triangles.len() + 4 * k));
     push_values(&mut s, offsets.map(|o| o.to_string()), 20);
     s.push_str("        </DataArray>\n");
     s.push_str("        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
@@ -179,6 +197,7 @@ pub fn vtu_string(
         &mut s,
         std::iter::repeat_n(VTK_LINE, edges.len())
             .chain(std::iter::repeat_n(VTK_TRIANGLE, triangles.len()))
+            .chain(std::iter::repeat_n(VTK_TETRA, tets.len()))
             .map(|t| t.to_string()),
         20,
     );
@@ -217,10 +236,14 @@ fn push_values(s: &mut String, vals: impl Iterator<Item = String>, per_line: usi
 /// * `dim` — 2 or 3; `x` holds the point coordinates flat
 ///   (`x[dim*i + c]`). Points are always written with 3 coordinates
 ///   (`z = 0` in 2D).
-/// * `edges` become `VTK_LINE` (3) cells, then `triangles` become
-///   `VTK_TRIANGLE` (5) cells, in that order.
-/// * A cell data `Int32` array `kind` holds [`KIND_EDGE`] (1) for edges and
-///   [`KIND_TRIANGLE`] (2) for triangles.
+/// * `edges` become [`VTK_LINE`] (3) cells, then `triangles` become
+///   [`VTK_TRIANGLE`] (5) cells, then `tets` become [`VTK_TETRA`] (10) cells,
+///   in that order. Tet vertices are written in the given order (VTK expects
+///   a positively oriented tet, i.e. vertex 3 on the side of the face
+///   `0, 1, 2` its counter-clockwise normal points to; the writer does not
+///   reorder). Pass `&[]` for `tets` in 2D or for surface-only meshes.
+/// * A cell data `Int32` array `kind` holds [`KIND_EDGE`] (1) for edges,
+///   [`KIND_TRIANGLE`] (2) for triangles and [`KIND_TET`] (3) for tets.
 /// * `point_data` holds optional scalar `Float64` point arrays `(name, values)`
 ///   with one value per point.
 ///
@@ -231,9 +254,10 @@ pub fn write_vtu(
     x: &[f64],
     edges: &[[usize; 2]],
     triangles: &[[usize; 3]],
+    tets: &[[usize; 4]],
     point_data: &[(&str, &[f64])],
 ) -> io::Result<()> {
-    let s = vtu_string(dim, x, edges, triangles, point_data)?;
+    let s = vtu_string(dim, x, edges, triangles, tets, point_data)?;
     write_atomic(path, s.as_bytes())
 }
 
@@ -332,7 +356,7 @@ mod tests {
         let u = [0.0, 0.5, 1.0, 1e-30];
         let dir = tmp_dir("consistent");
         let path = dir.join("mesh.vtu");
-        write_vtu(&path, 2, &x, &edges, &tris, &[("u", &u)]).unwrap();
+        write_vtu(&path, 2, &x, &edges, &tris, &[], &[("u", &u)]).unwrap();
         assert!(!dir.join("mesh.vtu.tmp").exists());
         let text = std::fs::read_to_string(&path).unwrap();
 
@@ -418,14 +442,108 @@ mod tests {
     #[test]
     fn vtu_rejects_bad_input() {
         let (x, edges, tris) = square();
-        assert!(vtu_string(4, &x, &edges, &tris, &[]).is_err());
-        assert!(vtu_string(3, &x[..7], &edges, &tris, &[]).is_err());
-        assert!(vtu_string(2, &x, &[[0, 4]], &[], &[]).is_err());
-        assert!(vtu_string(2, &x, &[], &[[0, 1, 9]], &[]).is_err());
-        assert!(vtu_string(2, &x, &edges, &tris, &[("u", &[1.0])]).is_err());
+        assert!(vtu_string(4, &x, &edges, &tris, &[], &[]).is_err());
+        assert!(vtu_string(3, &x[..7], &edges, &tris, &[], &[]).is_err());
+        assert!(vtu_string(2, &x, &[[0, 4]], &[], &[], &[]).is_err());
+        assert!(vtu_string(2, &x, &[], &[[0, 1, 9]], &[], &[]).is_err());
+        assert!(vtu_string(2, &x, &edges, &tris, &[], &[("u", &[1.0])]).is_err());
+        // A tet referencing a missing point: the error names the tet index.
+        let err = vtu_string(2, &x, &edges, &tris, &[[0, 1, 2, 3], [0, 1, 2, 4]], &[]).unwrap_err();
+        assert_eq!(err.kind(), io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("tet 1"), "{err}");
         // Empty mesh is fine.
-        let s = vtu_string(2, &[], &[], &[], &[]).unwrap();
+        let s = vtu_string(2, &[], &[], &[], &[], &[]).unwrap();
         assert!(s.contains("NumberOfPoints=\"0\" NumberOfCells=\"0\""));
+    }
+
+    /// A test mesh: flat points, edges, triangles, tets.
+    type Mesh = (Vec<f64>, Vec<[usize; 2]>, Vec<[usize; 3]>, Vec<[usize; 4]>);
+
+    /// Two tets sharing the face `1, 2, 3` (5 points in 3D), plus one boundary
+    /// triangle and one edge, so all three cell kinds appear.
+    fn two_tets() -> Mesh {
+        let x = vec![
+            0.0, 0.0, 0.0, // 0
+            1.0, 0.0, 0.0, // 1
+            0.0, 1.0, 0.0, // 2
+            0.0, 0.0, 1.0, // 3
+            1.0, 1.0, 1.0, // 4
+        ];
+        let edges = vec![[0, 4]];
+        let tris = vec![[0, 2, 1]];
+        // Both positively oriented: (p1-p0) x (p2-p0) . (p3-p0) > 0.
+        let tets = vec![[0, 1, 2, 3], [1, 4, 2, 3]];
+        (x, edges, tris, tets)
+    }
+
+    #[test]
+    fn vtu_two_tets_round_trip() {
+        let (x, edges, tris, tets) = two_tets();
+        let u = [0.0, 1.0, 2.0, 3.0, 4.5];
+        let dir = tmp_dir("tets");
+        let path = dir.join("tets.vtu");
+        write_vtu(&path, 3, &x, &edges, &tris, &tets, &[("u", &u)]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            text,
+            vtu_string(3, &x, &edges, &tris, &tets, &[("u", &u)]).unwrap()
+        );
+        assert!(text.contains("NumberOfPoints=\"5\" NumberOfCells=\"4\""));
+
+        let parse_usize = |name: &str| -> Vec<usize> {
+            data_array(&text, name)
+                .iter()
+                .map(|t| t.parse().unwrap())
+                .collect()
+        };
+        let pts: Vec<f64> = data_array(&text, "Points")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(pts, x, "3D points are written as given");
+        let types: Vec<u8> = data_array(&text, "types")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let kind: Vec<i32> = data_array(&text, "kind")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(types, vec![VTK_LINE, VTK_TRIANGLE, VTK_TETRA, VTK_TETRA]);
+        assert_eq!(types, vec![3, 5, 10, 10]);
+        assert_eq!(kind, vec![KIND_EDGE, KIND_TRIANGLE, KIND_TET, KIND_TET]);
+        assert_eq!(kind, vec![1, 2, 3, 3]);
+        assert_eq!(parse_usize("offsets"), vec![2, 5, 9, 13]);
+        assert_eq!(
+            parse_usize("connectivity"),
+            vec![0, 4, 0, 2, 1, 0, 1, 2, 3, 1, 4, 2, 3]
+        );
+
+        // Tets only: offsets are multiples of 4.
+        let s = vtu_string(3, &x, &[], &[], &tets, &[]).unwrap();
+        let offs: Vec<usize> = data_array(&s, "offsets")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(offs, vec![4, 8]);
+        assert_eq!(data_array(&s, "types"), vec!["10", "10"]);
+        assert_eq!(data_array(&s, "kind"), vec!["3", "3"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Tets in a 2D file are accepted (points get z = 0); validation is by
+    /// point count only.
+    #[test]
+    fn vtu_tets_in_2d_get_zero_z() {
+        let x = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+        let s = vtu_string(2, &x, &[], &[], &[[0, 1, 2, 3]], &[]).unwrap();
+        let pts: Vec<f64> = data_array(&s, "Points")
+            .iter()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        assert_eq!(pts.len(), 12);
+        assert!(pts.iter().skip(2).step_by(3).all(|&z| z == 0.0));
+        assert_eq!(data_array(&s, "types"), vec!["10"]);
     }
 
     #[test]
@@ -466,7 +584,7 @@ mod tests {
         let u = [1.0, 2.0, 3.0, 4.0];
         let dir = tmp_dir("meshio");
         let path = dir.join("mesh.vtu");
-        write_vtu(&path, 2, &x, &edges, &tris, &[("u", &u), ("v", &u)]).unwrap();
+        write_vtu(&path, 2, &x, &edges, &tris, &[], &[("u", &u), ("v", &u)]).unwrap();
         let script = r#"
 import sys, meshio
 m = meshio.read(sys.argv[1])
