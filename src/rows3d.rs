@@ -113,7 +113,20 @@ pub fn segment_meets_triangle(
     };
     let s0 = orient(t0, t1, t2, a0);
     let s1 = orient(t0, t1, t2, a1);
-    if (s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || (s0 == 0.0 && s1 == 0.0) {
+    if (s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) {
+        return false;
+    }
+    // Coplanar up to rounding: an orientation of two points within rounding of the plane is
+    // noise, and its sign says nothing. A segment lying in the plane meets the triangle only
+    // through an edge or an endpoint, which the vertex–triangle and edge–edge distances
+    // already report, so it does not count as passing through.
+    let n = (t1 - t0).cross(&(t2 - t0)).norm();
+    let scale = [t1 - t0, t2 - t0, a0 - t0, a1 - t0]
+        .iter()
+        .map(|v| v.norm())
+        .fold(0.0_f64, f64::max);
+    let tol = 64.0 * f64::EPSILON * n * scale;
+    if s0.abs() <= tol && s1.abs() <= tol {
         return false;
     }
     // the line a0→a1 passes the three edges of the triangle on the same side
@@ -271,6 +284,36 @@ mod tests {
         assert!(hit([0.2, 0.2, 0.0], [0.2, 0.2, 1.0])); // touches the face
         assert!(hit([0.0, 0.0, -1.0], [0.0, 0.0, 1.0])); // through a vertex
         assert!(!hit([0.1, 0.1, 0.0], [0.3, 0.1, 0.0])); // coplanar: not this test's case
+    }
+
+    #[test]
+    fn rows3d_coplanar_segment_beside_a_rotated_triangle_does_not_cross() {
+        // A coplanar, disjoint segment (the cube faces of the solids scene) rotated and moved
+        // so that the orientations are rounding noise of either sign: never a crossing.
+        // A segment that does pierce the triangle, moved the same way, still does.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut noisy = 0;
+        for _ in 0..2000 {
+            let axis = Vector3::new(rng.gen(), rng.gen(), rng.gen::<f64>()) - Vector3::repeat(0.5);
+            let rot = nalgebra::Rotation3::new(axis.normalize() * rng.gen_range(0.0..3.0));
+            let shift = Vector3::new(rng.gen(), rng.gen(), rng.gen::<f64>()) * 3.0;
+            let m = |p: [f64; 3]| rot * Vector3::from(p) * 0.1 + shift;
+            let t = [m([0.0, 0.0, 0.0]), m([1.0, 0.0, 0.0]), m([0.0, 1.0, 0.0])];
+            let (a, b) = (m([1.0, 1.0, 0.0]), m([2.0, 0.5, 0.0]));
+            let o = |p: &Vector3<f64>| (t[1] - t[0]).cross(&(t[2] - t[0])).dot(&(p - t[0]));
+            if o(&a) * o(&b) < 0.0 {
+                noisy += 1;
+            }
+            assert!(!segment_meets_triangle(&a, &b, &t[0], &t[1], &t[2]));
+            let (c, d) = (m([0.2, 0.2, -1.0]), m([0.3, 0.2, 1.0]));
+            assert!(segment_meets_triangle(&c, &d, &t[0], &t[1], &t[2]));
+        }
+        // the case is real: rounding gives opposite signs in a good share of the samples
+        assert!(
+            noisy > 100,
+            "only {noisy} samples had opposite-sign orientations"
+        );
     }
 }
 

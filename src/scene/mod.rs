@@ -1,7 +1,11 @@
 //! Scenes: a mesh, an energy, ε and an initial admissible configuration.
 
 pub mod balloons;
+pub mod balloons3d;
 pub mod ring;
+pub mod rod;
+pub mod sheets;
+pub mod solids;
 
 use crate::energy::TotalEnergy;
 use crate::mesh::Mesh;
