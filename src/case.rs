@@ -7,14 +7,164 @@ use contactlab::diagnostics::{converged_diagnostics, ConvergedDiagnostics, Diagn
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use contactlab::presets::Accuracy;
 use contactlab::scene::balloons::{self, BalloonsParams};
+use contactlab::scene::balloons3d::{self, Balloons3dParams};
 use contactlab::scene::ring::{self, RingParams};
+use contactlab::scene::rod::{self, RodParams};
+use contactlab::scene::sheets::{self, SheetsParams};
+use contactlab::scene::solids::{self, SolidsParams};
 use contactlab::scene::Scene;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-/// Scenes `contactlab run` and sweeps know.
-pub const SCENES: [&str; 2] = ["balloons", "ring"];
+/// Scenes `contactlab run` and sweeps know: 2D `balloons`, `ring`; 3D `sheets`, `rod`,
+/// `solids`, `balloons3d`.
+pub const SCENES: [&str; 6] = ["balloons", "ring", "sheets", "rod", "solids", "balloons3d"];
+
+/// Sets the fields of a 3D scene's parameters from `NAME=VALUE` pairs: `fields` lists the
+/// numeric fields by name, `flags` the boolean ones (value 0 or 1). Unknown names and
+/// non-0/1 flags are errors naming them.
+/// A named numeric field of a parameter struct.
+type Field<P> = (&'static str, fn(&mut P) -> &mut f64);
+/// A named boolean field of a parameter struct.
+type Flag<P> = (&'static str, fn(&mut P) -> &mut bool);
+
+fn set_fields<P>(
+    scene: &str,
+    p: &mut P,
+    params: &BTreeMap<String, f64>,
+    fields: &[Field<P>],
+    flags: &[Flag<P>],
+) -> Result<()> {
+    for (k, &v) in params {
+        if let Some((_, get)) = fields.iter().find(|(n, _)| n == k) {
+            *get(p) = v;
+        } else if let Some((_, get)) = flags.iter().find(|(n, _)| n == k) {
+            *get(p) = match v {
+                0.0 => false,
+                1.0 => true,
+                _ => bail!("scene {scene}: parameter {k:?} = {v} must be 0 or 1"),
+            };
+        } else {
+            let known: Vec<&str> = fields
+                .iter()
+                .map(|(n, _)| *n)
+                .chain(flags.iter().map(|(n, _)| *n))
+                .collect();
+            bail!(
+                "scene {scene}: unknown parameter {k:?} (known: {})",
+                known.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
+fn sheets_params(
+    n: usize,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<SheetsParams> {
+    let mut p = SheetsParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "sheets",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("weight", |p| &mut p.weight),
+            ("gap", |p| &mut p.gap),
+            ("half_size", |p| &mut p.half_size),
+            ("angle_deg", |p| &mut p.angle_deg),
+            ("stretch_lower", |p| &mut p.stretch_lower),
+            ("stretch_upper", |p| &mut p.stretch_upper),
+        ],
+        &[("lower_fixed", |p| &mut p.lower_fixed)],
+    )?;
+    Ok(p)
+}
+
+fn rod_params(n: usize, eps: Option<f64>, params: &BTreeMap<String, f64>) -> Result<RodParams> {
+    let mut p = RodParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "rod",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("weight", |p| &mut p.weight),
+            ("height", |p| &mut p.height),
+            ("stretch", |p| &mut p.stretch),
+            ("slack", |p| &mut p.slack),
+            ("swing_deg", |p| &mut p.swing_deg),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+fn solids_params(
+    n: usize,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<SolidsParams> {
+    let mut p = SolidsParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "solids",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("angle_deg", |p| &mut p.angle_deg),
+            ("upper_size", |p| &mut p.upper_size),
+            ("overlap", |p| &mut p.overlap),
+            ("gap", |p| &mut p.gap),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+fn balloons3d_params(
+    n: usize,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<Balloons3dParams> {
+    let mut p = Balloons3dParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "balloons3d",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("c", |p| &mut p.c),
+            ("radius", |p| &mut p.radius),
+            ("pad_gap", |p| &mut p.pad_gap),
+            ("twist_deg", |p| &mut p.twist_deg),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
 
 /// Builds scene `name` at mesh level `n` with ε (`None`: the scene's default, h/10) and numeric
 /// parameters. Unknown scene or parameter names are errors naming them.
@@ -65,14 +215,56 @@ pub fn build_scene(
             }
             Ok(ring::build(&p)?)
         }
+        "sheets" => Ok(sheets::build(&sheets_params(n, eps, params)?)?),
+        "rod" => Ok(rod::build(&rod_params(n, eps, params)?)?),
+        "solids" => Ok(solids::build(&solids_params(n, eps, params)?)?),
+        "balloons3d" => Ok(balloons3d::build(&balloons3d_params(n, eps, params)?)?),
         other => bail!("unknown scene {other:?} (available: {})", SCENES.join(", ")),
     }
 }
 
-/// The coarsest mesh level `n` of scene `name` whose mesh size is at most `h`: balloons
-/// `h = 1.6/n`, so `n = ⌈1.6/h⌉`; ring `h = 2 sin(π/n)` with n even, so the smallest even
-/// `n ≥ π / asin(h/2)` (at least 6).
-pub fn n_for_h(name: &str, h: f64) -> Result<usize> {
+/// The default mesh level of scene `name` for `contactlab run` (40 for the 2D scenes, the
+/// scene's own default in 3D).
+pub fn default_n(name: &str) -> usize {
+    match name {
+        "sheets" => SheetsParams::default().n,
+        "rod" => RodParams::default().n,
+        "solids" => SolidsParams::default().n,
+        "balloons3d" => Balloons3dParams::default().n,
+        _ => 40,
+    }
+}
+
+/// The full parameter set of a 3D scene built by [`build_scene`] (for summary.json), or
+/// `None` for the 2D scenes (whose runs record their own).
+pub fn params_json(
+    name: &str,
+    n: usize,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<Option<serde_json::Value>> {
+    Ok(Some(match name {
+        "sheets" => serde_json::to_value(sheets_params(n, eps, params)?)?,
+        "rod" => serde_json::to_value(rod_params(n, eps, params)?)?,
+        "solids" => serde_json::to_value(solids_params(n, eps, params)?)?,
+        "balloons3d" => serde_json::to_value(balloons3d_params(n, eps, params)?)?,
+        _ => return Ok(None),
+    }))
+}
+
+/// The smallest `n` in `1..=max_n` with `size(n) ≤ h` (the sizes decrease with n).
+fn first_level(h: f64, max_n: usize, size: impl Fn(usize) -> f64) -> Result<usize> {
+    (1..=max_n)
+        .find(|&n| size(n) <= h)
+        .ok_or_else(|| anyhow::anyhow!("h = {h} needs a level above the scene's n ≤ {max_n}"))
+}
+
+/// The coarsest mesh level `n` of scene `name` (with parameters `params`, which the 3D
+/// scenes' mesh sizes depend on) whose mesh size is at most `h`: balloons `h = 1.6/n`, so
+/// `n = ⌈1.6/h⌉`; ring `h = 2 sin(π/n)` with n even, so the smallest even
+/// `n ≥ π / asin(h/2)` (at least 6); the 3D scenes: the smallest level whose `mesh_size` is
+/// at most `h`.
+pub fn n_for_h(name: &str, h: f64, params: &BTreeMap<String, f64>) -> Result<usize> {
     if !(h.is_finite() && h > 0.0) {
         bail!("h = {h}: a mesh size must be finite and > 0");
     }
@@ -99,6 +291,30 @@ pub fn n_for_h(name: &str, h: f64) -> Result<usize> {
                 }
                 n
             }
+        }
+        "sheets" => {
+            let base = sheets_params(1, None, params)?;
+            first_level(h, 1000, |n| {
+                sheets::mesh_size(&SheetsParams { n, ..base.clone() })
+            })?
+        }
+        "rod" => {
+            let base = rod_params(1, None, params)?;
+            first_level(h, 100_000, |n| {
+                rod::mesh_size(&RodParams { n, ..base.clone() })
+            })?
+        }
+        "solids" => {
+            let base = solids_params(1, None, params)?;
+            first_level(h, 200, |n| {
+                solids::mesh_size(&SolidsParams { n, ..base.clone() })
+            })?
+        }
+        "balloons3d" => {
+            let base = balloons3d_params(1, None, params)?;
+            first_level(h, 7, |n| {
+                balloons3d::mesh_size(&Balloons3dParams { n, ..base.clone() })
+            })?
         }
         other => bail!("unknown scene {other:?} (available: {})", SCENES.join(", ")),
     };
@@ -353,4 +569,68 @@ pub fn row_values(scene: &Scene, o: &CaseOutcome) -> BTreeMap<&'static str, Stri
     m.insert("t_solve_s", f(sum(|x| x.t_solve_s)));
     m.insert("t_diagnostics_s", f(o.t_diagnostics_s));
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scene_builds_by_name_at_its_default_level() {
+        for name in SCENES {
+            let s = build_scene(name, default_n(name), None, &BTreeMap::new()).unwrap();
+            assert_eq!(s.name, name);
+            let dim = if ["balloons", "ring"].contains(&name) {
+                2
+            } else {
+                3
+            };
+            assert_eq!(s.mesh.dim, dim, "{name}");
+        }
+    }
+
+    #[test]
+    fn n_for_h_of_the_3d_scenes_is_the_coarsest_level_fine_enough() {
+        let none = BTreeMap::new();
+        for name in ["sheets", "rod", "solids", "balloons3d"] {
+            for n in 1..=3 {
+                let h = build_scene(name, n, None, &none).unwrap().h;
+                assert_eq!(n_for_h(name, h, &none).unwrap(), n, "{name} n={n} h={h}");
+                // just above h: the same level; just below: a finer one
+                assert_eq!(n_for_h(name, h * (1.0 + 1e-9), &none).unwrap(), n);
+                assert!(n_for_h(name, h * (1.0 - 1e-9), &none).unwrap() > n);
+            }
+        }
+        // the parameters change h: a sheets stretch makes the elements smaller
+        let p: BTreeMap<String, f64> = [("stretch_lower".to_string(), 1.5)].into();
+        let h = build_scene("sheets", 2, None, &p).unwrap().h;
+        assert!(h < build_scene("sheets", 2, None, &none).unwrap().h);
+        assert_eq!(n_for_h("sheets", h, &p).unwrap(), 2);
+        assert!(n_for_h("sheets", h, &none).unwrap() > 2);
+        let e = n_for_h("balloons3d", 1e-4, &none).unwrap_err().to_string();
+        assert!(e.contains("n ≤ 7"), "{e}");
+    }
+
+    #[test]
+    fn unknown_3d_parameters_and_bad_flags_are_named() {
+        let p: BTreeMap<String, f64> = [("weigth".to_string(), 1.0)].into();
+        let e = build_scene("sheets", 1, None, &p)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("\"weigth\"") && e.contains("weight"), "{e}");
+        let p: BTreeMap<String, f64> = [("lower_fixed".to_string(), 0.5)].into();
+        let e = build_scene("sheets", 1, None, &p)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("lower_fixed") && e.contains("0 or 1"), "{e}");
+        let p: BTreeMap<String, f64> = [("lower_fixed".to_string(), 1.0)].into();
+        let s = build_scene("sheets", 1, None, &p).unwrap();
+        assert!(s.mesh.bodies[0].vertices.iter().all(|&v| s.mesh.fixed[v]));
+        let e = n_for_h("rod", 0.1, &[("x".to_string(), 1.0)].into())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("\"x\""), "{e}");
+    }
 }

@@ -1,6 +1,6 @@
 //! The `contactlab` command line.
 //!
-//! `contactlab run [balloons|ring] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
+//! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
 //! outer loop on a scene and writes a run directory (see README).
 
 use anyhow::{bail, Context, Result};
@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 use contactlab::contact::near_pairs;
 use contactlab::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
-use contactlab::output::svg::{shapes_and_energy_svg, write_svg, Shape};
+use contactlab::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
 use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
 use contactlab::presets::Accuracy;
@@ -55,24 +55,26 @@ enum Command {
 
 #[derive(clap::Args, Clone)]
 struct RunArgs {
-    /// Scene name: balloons or ring.
+    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D).
     #[arg(default_value = "balloons")]
     scene: String,
     /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
     #[arg(long, default_value = "clarabel")]
     backend: String,
-    /// Elements per membrane (balloons) or edges of the ring.
-    #[arg(long, default_value_t = 40)]
-    n: usize,
-    /// A ring parameter NAME=VALUE (p, aspect, half_span); repeatable.
+    /// Mesh level: elements per membrane (balloons), edges of the ring (both default 40), or
+    /// the 3D scene's level (default: the scene's own, README "3D").
+    #[arg(long)]
+    n: Option<usize>,
+    /// A scene parameter NAME=VALUE (ring: p, aspect, half_span; the 3D scenes: README
+    /// "3D"); repeatable.
     #[arg(long = "param")]
     params: Vec<String>,
-    /// Gas constant C.
-    #[arg(long, default_value_t = 50.0)]
-    c: f64,
-    /// Elasticity coefficient μ.
-    #[arg(long, default_value_t = 1.0)]
-    mu: f64,
+    /// Gas constant C (balloons: default 50; balloons3d: default 30).
+    #[arg(long)]
+    c: Option<f64>,
+    /// Elasticity coefficient μ (default 1).
+    #[arg(long)]
+    mu: Option<f64>,
     /// ε (default h/10).
     #[arg(long)]
     eps: Option<f64>,
@@ -181,12 +183,13 @@ struct Summary {
 }
 
 fn run_cmd(a: RunArgs) -> Result<()> {
+    let n = a.n.unwrap_or_else(|| case::default_n(&a.scene));
     let (scene, params) = match a.scene.as_str() {
         "balloons" => {
             let mut params = BalloonsParams {
-                n: a.n,
-                c: a.c,
-                mu: a.mu,
+                n,
+                c: a.c.unwrap_or(50.0),
+                mu: a.mu.unwrap_or(1.0),
                 eps: a.eps,
                 ..Default::default()
             };
@@ -203,17 +206,17 @@ fn run_cmd(a: RunArgs) -> Result<()> {
                 params.heights.copy_from_slice(hs);
             }
             if !a.params.is_empty() {
-                bail!("--param is for the ring scene; the balloons take --c, --mu, --perturb, --heights");
+                bail!("--param is for the ring and the 3D scenes; the balloons take --c, --mu, --perturb, --heights");
             }
             (balloons::build(&params)?, serde_json::to_value(&params)?)
         }
         "ring" => {
-            if !a.perturb.is_empty() || a.heights.is_some() {
-                bail!("--perturb and --heights are balloons options; the ring takes --mu and --param p=..,aspect=..,half_span=..");
+            if !a.perturb.is_empty() || a.heights.is_some() || a.c.is_some() {
+                bail!("--c, --perturb and --heights are balloons options; the ring takes --mu and --param p=..,aspect=..,half_span=..");
             }
             let mut params = RingParams {
-                n: a.n,
-                mu: a.mu,
+                n,
+                mu: a.mu.unwrap_or(1.0),
                 eps: a.eps,
                 ..Default::default()
             };
@@ -227,7 +230,26 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             }
             (ring::build(&params)?, serde_json::to_value(&params)?)
         }
-        other => bail!("unknown scene {other:?} (available: balloons, ring)"),
+        name => {
+            if !a.perturb.is_empty() || a.heights.is_some() {
+                bail!("--perturb and --heights are options of the 2D balloons, not of {name:?}");
+            }
+            let mut p = case::parse_params(&a.params)?;
+            if let Some(mu) = a.mu {
+                p.insert("mu".into(), mu);
+            }
+            if let Some(c) = a.c {
+                if name != "balloons3d" {
+                    bail!(
+                        "--c (a gas constant) is an option of the balloons scenes, not of {name:?}"
+                    );
+                }
+                p.insert("c".into(), c);
+            }
+            let scene = case::build_scene(name, n, a.eps, &p)?;
+            let json = case::params_json(name, n, a.eps, &p)?.unwrap_or_default();
+            (scene, json)
+        }
     };
     let mut qps = a.accuracy.qp_settings(&a.backend);
     if let Some(t) = a.qp_tol {
@@ -358,46 +380,57 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         .iter()
         .map(|&(i, j)| [mesh.bodies[i].name.clone(), mesh.bodies[j].name.clone()])
         .collect();
-    let balloon_pairs: Vec<(usize, usize)> = pattern
-        .iter()
-        .copied()
-        .filter(|&(i, j)| i < 4 && j < 4)
-        .collect();
-    let state = if scene.name == "ring" {
-        ring::classify_state(mesh, &res.x, scene.eps)
-    } else {
-        classify_state(&balloon_pairs)
+    let state = match scene.name.as_str() {
+        "ring" => ring::classify_state(mesh, &res.x, scene.eps),
+        "balloons" => {
+            let balloon_pairs: Vec<(usize, usize)> = pattern
+                .iter()
+                .copied()
+                .filter(|&(i, j)| i < 4 && j < 4)
+                .collect();
+            classify_state(&balloon_pairs)
+        }
+        _ => contact_state(&names),
     };
     // Picture: initial, an intermediate and the final shapes, J beside them.
     let mid = snapshots.len() / 2;
-    let shapes = vec![
-        Shape {
-            label: "initial (k=0)".into(),
-            x: &snapshots[0].1,
-            edges: &mesh.edges,
-            triangles: &mesh.triangles,
-        },
-        Shape {
-            label: format!("intermediate (k={})", snapshots[mid].0),
-            x: &snapshots[mid].1,
-            edges: &mesh.edges,
-            triangles: &mesh.triangles,
-        },
-        Shape {
-            label: format!("final (k={})", res.outer_iterations),
-            x: &res.x,
-            edges: &mesh.edges,
-            triangles: &mesh.triangles,
-        },
+    let panels = [
+        ("initial (k=0)".to_string(), &snapshots[0].1),
+        (
+            format!("intermediate (k={})", snapshots[mid].0),
+            &snapshots[mid].1,
+        ),
+        (format!("final (k={})", res.outer_iterations), &res.x),
     ];
     let title = format!(
         "{} n={} backend={} state={} J={:.10e}",
-        scene.name, a.n, a.backend, state, res.energy
+        scene.name, n, a.backend, state, res.energy
     );
-    write_svg(
-        &out.join("shapes.svg"),
-        &shapes_and_energy_svg(&shapes, &energies, &title),
-    )?;
+    let svg = if mesh.dim == 3 {
+        let faces = drawn_faces(mesh);
+        let shapes: Vec<Shape3> = panels
+            .iter()
+            .map(|(label, x)| Shape3 {
+                label: label.clone(),
+                x,
+                edges: &mesh.edges,
+                faces: &faces,
+            })
+            .collect();
+        projection_svg(&shapes, &energies, &title)
+    } else {
+        let shapes: Vec<Shape> = panels
+            .iter()
+            .map(|(label, x)| Shape {
+                label: label.clone(),
+                x,
+                edges: &mesh.edges,
+                triangles: &mesh.triangles,
+            })
+            .collect();
+        shapes_and_energy_svg(&shapes, &energies, &title)
+    };
+    write_svg(&out.join("shapes.svg"), &svg)?;
     let diagnostics = if res.status == RunStatus::Converged {
         let (diag, tol) = case::lemma_diagnostics(&scene, &res)?;
         let mut w = csv::Writer::from_writer(Vec::new());
@@ -414,8 +447,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),
         scene: scene.name.clone(),
-        dim: 2,
-        n: a.n,
+        dim: mesh.dim,
+        n,
         h: scene.h,
         eps: scene.eps,
         backend: a.backend.clone(),
@@ -457,6 +490,31 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
     }
     Ok(())
+}
+
+/// The state of a 3D run: the pairs of bodies in contact (`lower-upper;…`), or
+/// `no-contact`.
+fn contact_state(pairs: &[[String; 2]]) -> String {
+    if pairs.is_empty() {
+        "no-contact".into()
+    } else {
+        pairs
+            .iter()
+            .map(|[a, b]| format!("{a}-{b}"))
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+}
+
+/// The faces the 3D picture fills: those of bodies with a free vertex. A body whose vertices
+/// are all fixed (the box of balloons3d, an obstacle sheet) is drawn by its edges alone, so
+/// it does not hide what it holds.
+fn drawn_faces(mesh: &contactlab::mesh::Mesh) -> Vec<[usize; 3]> {
+    mesh.bodies
+        .iter()
+        .filter(|b| b.vertices.iter().any(|&v| !mesh.fixed[v]))
+        .flat_map(|b| b.faces.iter().map(|&f| mesh.faces[f]))
+        .collect()
 }
 
 /// The triangles a VTK frame shows: the solid elements in 2D, the contact faces in 3D (the

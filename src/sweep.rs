@@ -396,7 +396,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         let mut levels = b.n.clone();
         for &h in &b.h {
             levels.push(
-                crate::case::n_for_h(&b.name, h)
+                crate::case::n_for_h(&b.name, h, &b.params)
                     .with_context(|| format!("scene block {} ({})", bi + 1, b.name))?,
             );
         }
