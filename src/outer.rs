@@ -98,6 +98,11 @@ pub struct OuterSettings {
     pub trust: TrustSettings,
     /// Inner loop settings.
     pub inner: InnerSettings,
+    /// Wall-time limit of the run in seconds (`None`: no limit). Checked before every outer
+    /// step and between inner steps; a QP in progress is not interrupted, so the run may
+    /// overshoot by one QP solve. On expiry the run stops with [`RunStatus::TimeLimit`] and
+    /// returns its last accepted (admissible) iterate.
+    pub time_limit_s: Option<f64>,
 }
 
 impl Default for OuterSettings {
@@ -109,6 +114,7 @@ impl Default for OuterSettings {
             lazy_start: 0.25,
             trust: TrustSettings::default(),
             inner: InnerSettings::default(),
+            time_limit_s: None,
         }
     }
 }
@@ -129,6 +135,8 @@ pub enum RunStatus {
     Inadmissible,
     /// J increased from one outer iterate to the next (a bug).
     EnergyIncreased,
+    /// The wall-time limit ([`OuterSettings::time_limit_s`]) passed.
+    TimeLimit,
 }
 
 impl RunStatus {
@@ -141,6 +149,7 @@ impl RunStatus {
             RunStatus::LineSearchFailed => "line_search_failed",
             RunStatus::Inadmissible => "inadmissible",
             RunStatus::EnergyIncreased => "energy_increased",
+            RunStatus::TimeLimit => "time_limit",
         }
     }
 }
@@ -202,6 +211,9 @@ pub enum RunError {
     /// J(φ_0) is not finite.
     #[error("initial energy is not finite ({0})")]
     BadInitialEnergy(f64),
+    /// The time limit is not > 0.
+    #[error("time limit must be > 0 seconds, got {0}")]
+    BadTimeLimit(f64),
 }
 
 /// Final state of a run.
@@ -316,7 +328,17 @@ pub fn run(
     if !(eps > 0.0 && eps.is_finite()) {
         return Err(RunError::BadEps(eps));
     }
+    if let Some(t) = settings.time_limit_s {
+        if !(t > 0.0) {
+            return Err(RunError::BadTimeLimit(t));
+        }
+    }
     let start = Instant::now();
+    // A limit too large for an Instant (e.g. 1e300 s) is no limit.
+    let deadline = settings
+        .time_limit_s
+        .and_then(|t| std::time::Duration::try_from_secs_f64(t).ok())
+        .and_then(|d| start.checked_add(d));
     let t0 = Instant::now();
     // The start is checked over every disjoint pair, the all-fixed ones included (once).
     let md0 = min_distance(mesh, x0, 2.0 * eps, false);
@@ -386,6 +408,10 @@ pub fn run(
         2.0 * 3f64.sqrt()
     };
     for k in 1..=settings.max_outer {
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            result.status = RunStatus::TimeLimit;
+            break;
+        }
         let tp = Instant::now();
         // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
         // never given rows).
@@ -420,6 +446,7 @@ pub fn run(
             Some(&last_mult),
             backend,
             &settings.inner,
+            deadline,
         )?;
         let box_active = trust.is_some_and(|tb| {
             let dmax = x
@@ -502,6 +529,10 @@ pub fn run(
         }
         if sub.line_search_failed {
             result.status = RunStatus::LineSearchFailed;
+            break;
+        }
+        if sub.timed_out {
+            result.status = RunStatus::TimeLimit;
             break;
         }
         if settings.pruning == Pruning::TrustRegion {

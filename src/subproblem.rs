@@ -96,6 +96,9 @@ pub struct SubproblemResult {
     pub t_assembly_s: f64,
     /// Seconds spent in the backend.
     pub t_solve_s: f64,
+    /// The deadline passed before the inner loop finished: `y` is the last accepted inner
+    /// iterate (in T(ψ), with J no larger than at the start).
+    pub timed_out: bool,
 }
 
 /// Maps vertex dofs to QP columns (free dofs only).
@@ -272,6 +275,7 @@ pub fn solve_subproblem(
     warm_pairs: Option<&HashMap<ContactPair, [f64; 4]>>,
     backend: &mut dyn QpBackend,
     settings: &InnerSettings,
+    deadline: Option<Instant>,
 ) -> Result<SubproblemResult, QpError> {
     let mut rows = rows;
     let warm_pairs = warm_pairs.filter(|_| settings.warm_start);
@@ -291,9 +295,16 @@ pub fn solve_subproblem(
         t_assembly_s: 0.0,
         t_pairs_s: 0.0,
         t_solve_s: 0.0,
+        timed_out: false,
     };
     let mut warm: Option<WarmStart> = None;
     'inner: for _ in 0..settings.max_inner {
+        // Checked between inner steps (a QP in progress is not interrupted): the time limit
+        // overshoots by at most one QP solve and line search.
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            res.timed_out = true;
+            break;
+        }
         res.inner_iterations += 1;
         let (sol, qp, g, d) = loop {
             let t0 = Instant::now();
