@@ -180,3 +180,73 @@ fn sweep_shards_concatenate_to_the_whole() {
     std::fs::write(d.join("cat.csv"), cat).unwrap();
     assert_eq!(rows(&d.join("cat.csv")), a);
 }
+
+/// Starts the sweep into `out` (resuming when asked) and SIGKILLs it once `more` rows beyond
+/// `have` are in the file. Returns the number of complete rows left by the kill. Panics if the
+/// sweep ends before it could be killed (then nothing was tested).
+fn kill_after(d: &Path, out: &str, resume: bool, have: usize, more: usize) -> usize {
+    use std::os::unix::process::ExitStatusExt;
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_contactlab"));
+    cmd.arg("sweep")
+        .arg(d.join("s.toml"))
+        .args(["--quiet", "--out", out, "--jobs", "1"])
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null());
+    if resume {
+        cmd.arg("--resume");
+    }
+    let mut child = cmd.spawn().unwrap();
+    let complete_rows = || {
+        let text = std::fs::read(d.join(out)).unwrap_or_default();
+        text.iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            .saturating_sub(1)
+    };
+    loop {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the sweep ended before it was killed"
+        );
+        if complete_rows() >= have + more {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap(); // SIGKILL
+    let status = child.wait().unwrap();
+    assert_eq!(status.signal(), Some(9), "{status:?}");
+    complete_rows()
+}
+
+#[test]
+fn sweep_sigkilled_twice_and_resumed_equals_uninterrupted() {
+    let d = dir("sweep_sigkill");
+    let a = full(&d);
+    // Killed by SIGKILL at whatever point it has reached (possibly in the middle of writing a
+    // row), twice, then resumed to the end.
+    let k1 = kill_after(&d, "k.csv", false, 0, 2);
+    assert!(
+        k1 < a.len(),
+        "{k1} of {} rows before the first kill",
+        a.len()
+    );
+    let k2 = kill_after(&d, "k.csv", true, k1, 2);
+    assert!(
+        k2 < a.len(),
+        "{k2} of {} rows before the second kill",
+        a.len()
+    );
+    let out = sweep(&d, &["--out", "k.csv", "--resume"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        rows(&d.join("k.csv")),
+        a,
+        "resumed rows differ from the uninterrupted sweep"
+    );
+}
