@@ -405,3 +405,89 @@ fn dynamics_bad_input_is_named() {
     // the inertia term is removed again after a run (and never added on bad input)
     assert_eq!(system.energy.terms.len(), nterms);
 }
+
+/// `contactlab run collide --dynamic`: the run directory (history.csv per step, contacts.csv
+/// with the impact's forces, a .pvd series timed by the steps, summary.json), and bad input
+/// as exit code 2 with the value named.
+#[test]
+fn dynamics_cli_run_directory_and_bad_input() {
+    let bin = env!("CARGO_BIN_EXE_contactlab");
+    let dir = std::env::temp_dir().join(format!("contactlab_dyn_cli_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(bin)
+        .args([
+            "run",
+            "collide",
+            "--dynamic",
+            "--steps",
+            "14",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let hist = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let header = hist.lines().next().unwrap();
+    for col in [
+        "time",
+        "kinetic",
+        "elastic",
+        "potential",
+        "total",
+        "momentum_x",
+        "min_distance",
+        "active_contacts",
+        "outer_iterations",
+        "wall_time_s",
+    ] {
+        assert!(
+            header.split(',').any(|c| c == col),
+            "{col} missing: {header}"
+        );
+    }
+    assert_eq!(hist.lines().count(), 1 + 15);
+    let contacts = std::fs::read_to_string(dir.join("contacts.csv")).unwrap();
+    assert!(contacts.starts_with("step,time,kind,first,second,force,distance"));
+    let forces: Vec<f64> = contacts
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(5).unwrap().parse().unwrap())
+        .collect();
+    assert!(!forces.is_empty() && forces.iter().any(|&f| f > 0.0));
+    let pvd = std::fs::read_to_string(dir.join("frames.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 15);
+    assert!(pvd.contains("timestep=\"7e-2\"") && dir.join("frames/frame_00014.vtu").exists());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["metrics"]["all_admissible"], true);
+    assert_eq!(summary["metrics"]["steps_taken"], 14);
+    assert!(summary["metrics"]["momentum_error"].as_f64().unwrap() < 1e-9);
+    for (args, want) in [
+        (vec!["--dt", "0"], "dt must be finite and > 0, got 0"),
+        (vec!["--steps", "0"], "steps must be >= 1, got 0"),
+        (vec!["--scheme", "rk4"], "--scheme \"rk4\""),
+    ] {
+        let o = std::process::Command::new(bin)
+            .args(["run", "collide", "--dynamic", "--quiet", "--out"])
+            .arg(dir.join("bad"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    let o = std::process::Command::new(bin)
+        .args(["run", "drop", "--quiet"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--dynamic"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
