@@ -654,6 +654,17 @@ pub fn build_dynamic_scene(
     eps: Option<f64>,
     params: &BTreeMap<String, f64>,
 ) -> Result<DynamicScene> {
+    Ok(build_dynamic_scene_json(name, n, eps, params)?.0)
+}
+
+/// [`build_dynamic_scene`], and the scene's full parameter set as JSON (summary.json): the
+/// dynamic scenes' parameter structs, or `{n, eps, params}` for a wrapped static scene.
+pub fn build_dynamic_scene_json(
+    name: &str,
+    n: Option<usize>,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<(DynamicScene, serde_json::Value)> {
     match name {
         "drop" => {
             let mut p = DropParams {
@@ -685,7 +696,7 @@ pub fn build_dynamic_scene(
             )?;
             p.ring.layers = count("drop", "layers", layers)?;
             p.floor_edges = count("drop", "floor_edges", floor_edges)?;
-            Ok(dynamic::drop(&p)?)
+            Ok((dynamic::drop(&p)?, serde_json::to_value(&p)?))
         }
         "collide" => {
             let mut p = CollideParams {
@@ -715,7 +726,7 @@ pub fn build_dynamic_scene(
                 &[],
             )?;
             p.ring.layers = count("collide", "layers", layers)?;
-            Ok(dynamic::collide(&p)?)
+            Ok((dynamic::collide(&p)?, serde_json::to_value(&p)?))
         }
         "drop3d" => {
             let mut p = Drop3dParams {
@@ -742,19 +753,27 @@ pub fn build_dynamic_scene(
                 ],
                 &[],
             )?;
-            Ok(dynamic::drop3d(&p)?)
+            Ok((dynamic::drop3d(&p)?, serde_json::to_value(&p)?))
         }
         other if SCENES.contains(&other) => {
-            let scene = build_scene(other, n.unwrap_or_else(|| default_n(other)), eps, params)?;
+            let n = n.unwrap_or_else(|| default_n(other));
+            let scene = build_scene(other, n, eps, params)?;
             let density = vec![1.0; scene.mesh.bodies.len()];
             let v0 = vec![0.0; scene.x0.len()];
-            Ok(DynamicScene {
-                scene,
-                density,
-                v0,
-                dt: 0.0,
-                steps: 0,
-            })
+            let json = match params_json(other, n, eps, params)? {
+                Some(j) => j,
+                None => serde_json::json!({ "n": n, "eps": eps, "params": params }),
+            };
+            Ok((
+                DynamicScene {
+                    scene,
+                    density,
+                    v0,
+                    dt: 0.0,
+                    steps: 0,
+                },
+                json,
+            ))
         }
         other => bail!(
             "unknown scene {other:?} (dynamic: {}; static, with --dynamic: {})",
@@ -771,28 +790,6 @@ fn count(scene: &str, name: &str, v: f64) -> Result<usize> {
     } else {
         bail!("scene {scene}: parameter {name:?} = {v} must be a non-negative integer")
     }
-}
-
-/// The parameters of a dynamic scene as JSON (summary.json).
-pub fn dynamic_params_json(
-    name: &str,
-    n: Option<usize>,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<serde_json::Value> {
-    // rebuild the parameter structs the way build_dynamic_scene does, via its own parsing
-    let mut out = serde_json::Map::new();
-    out.insert("scene".into(), name.into());
-    if let Some(n) = n {
-        out.insert("n".into(), n.into());
-    }
-    if let Some(e) = eps {
-        out.insert("eps".into(), e.into());
-    }
-    for (k, v) in params {
-        out.insert(k.clone(), (*v).into());
-    }
-    Ok(serde_json::Value::Object(out))
 }
 
 /// The smallest mesh level of dynamic scene `name` whose h is at most `h` (drop, collide: the

@@ -83,7 +83,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         }
         params.insert("c".into(), c);
     }
-    let mut ds = case::build_dynamic_scene(&a.scene, a.n, a.eps, &params)?;
+    let (mut ds, params_json) = case::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
     let is_dynamic_scene = DYNAMIC_SCENES.contains(&a.scene.as_str());
     let dt = a.dt.unwrap_or(ds.dt);
     let steps = a.steps.unwrap_or(ds.steps);
@@ -272,7 +272,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         qp_tol: qps.eps_abs,
         weight,
         metrics: metrics.clone(),
-        params: case::dynamic_params_json(&a.scene, a.n, a.eps, &params)?,
+        params: params_json,
         settings: OuterSettings {
             tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
             max_outer: cs.max_outer,
