@@ -4,10 +4,15 @@
 
 use anyhow::{bail, Result};
 use contactlab::diagnostics::{converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings};
+use contactlab::dynamics::{
+    lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, DynamicState, PairForce,
+    StepRecord, System, POTENTIAL_TERMS,
+};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use contactlab::presets::Accuracy;
 use contactlab::scene::balloons::{self, BalloonsParams};
 use contactlab::scene::balloons3d::{self, Balloons3dParams};
+use contactlab::scene::dynamic::{self, CollideParams, Drop3dParams, DropParams, DynamicScene};
 use contactlab::scene::ring::{self, RingParams};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::sheets::{self, SheetsParams};
@@ -632,5 +637,316 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("\"x\""), "{e}");
+    }
+}
+
+/// The dynamic scenes (§6; `contactlab run NAME --dynamic`): 2D `drop`, `collide`; 3D
+/// `drop3d`. The static scenes of [`SCENES`] also run with `--dynamic`, with density 1 per
+/// body, zero initial velocity and no default Δt or number of steps.
+pub const DYNAMIC_SCENES: [&str; 3] = ["drop", "collide", "drop3d"];
+
+/// A dynamic scene by name: the dynamic scenes with their parameters (`--param`), or a static
+/// scene of [`SCENES`] wrapped with density 1 per body and zero velocity (its Δt and steps
+/// then have no default: 0 and 0, which [`DynamicSettings::validate`] refuses).
+pub fn build_dynamic_scene(
+    name: &str,
+    n: Option<usize>,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<DynamicScene> {
+    Ok(build_dynamic_scene_json(name, n, eps, params)?.0)
+}
+
+/// [`build_dynamic_scene`], and the scene's full parameter set as JSON (summary.json): the
+/// dynamic scenes' parameter structs, or `{n, eps, params}` for a wrapped static scene.
+pub fn build_dynamic_scene_json(
+    name: &str,
+    n: Option<usize>,
+    eps: Option<f64>,
+    params: &BTreeMap<String, f64>,
+) -> Result<(DynamicScene, serde_json::Value)> {
+    match name {
+        "drop" => {
+            let mut p = DropParams {
+                eps,
+                ..Default::default()
+            };
+            if let Some(n) = n {
+                p.ring.n = n;
+            }
+            let mut layers = p.ring.layers as f64;
+            let mut floor_edges = p.floor_edges as f64;
+            set_fields(
+                "drop",
+                &mut (&mut p, &mut layers, &mut floor_edges),
+                params,
+                &[
+                    ("mu", |p| &mut p.0.ring.mu),
+                    ("lambda", |p| &mut p.0.ring.lambda),
+                    ("radius", |p| &mut p.0.ring.radius),
+                    ("inner", |p| &mut p.0.ring.inner),
+                    ("layers", |p| &mut *p.1),
+                    ("density", |p| &mut p.0.density),
+                    ("g", |p| &mut p.0.g),
+                    ("height", |p| &mut p.0.height),
+                    ("floor_half_width", |p| &mut p.0.floor_half_width),
+                    ("floor_edges", |p| &mut *p.2),
+                ],
+                &[],
+            )?;
+            p.ring.layers = count("drop", "layers", layers)?;
+            p.floor_edges = count("drop", "floor_edges", floor_edges)?;
+            Ok((dynamic::drop(&p)?, serde_json::to_value(&p)?))
+        }
+        "collide" => {
+            let mut p = CollideParams {
+                eps,
+                ..Default::default()
+            };
+            if let Some(n) = n {
+                p.ring.n = n;
+            }
+            let mut layers = p.ring.layers as f64;
+            set_fields(
+                "collide",
+                &mut (&mut p, &mut layers),
+                params,
+                &[
+                    ("mu", |p| &mut p.0.ring.mu),
+                    ("lambda", |p| &mut p.0.ring.lambda),
+                    ("radius", |p| &mut p.0.ring.radius),
+                    ("inner", |p| &mut p.0.ring.inner),
+                    ("layers", |p| &mut *p.1),
+                    ("density", |p| &mut p.0.density),
+                    ("density_ratio", |p| &mut p.0.density_ratio),
+                    ("gap", |p| &mut p.0.gap),
+                    ("speed", |p| &mut p.0.speed),
+                    ("offset_cells", |p| &mut p.0.offset_cells),
+                ],
+                &[],
+            )?;
+            p.ring.layers = count("collide", "layers", layers)?;
+            Ok((dynamic::collide(&p)?, serde_json::to_value(&p)?))
+        }
+        "drop3d" => {
+            let mut p = Drop3dParams {
+                eps,
+                ..Default::default()
+            };
+            if let Some(n) = n {
+                p.n = n;
+            }
+            set_fields(
+                "drop3d",
+                &mut p,
+                params,
+                &[
+                    ("half_size", |p| &mut p.half_size),
+                    ("angle_deg", |p| &mut p.angle_deg),
+                    ("tilt_deg", |p| &mut p.tilt_deg),
+                    ("height", |p| &mut p.height),
+                    ("obstacle_half_size", |p| &mut p.obstacle_half_size),
+                    ("mu", |p| &mut p.mu),
+                    ("lambda", |p| &mut p.lambda),
+                    ("density", |p| &mut p.density),
+                    ("g", |p| &mut p.g),
+                ],
+                &[],
+            )?;
+            Ok((dynamic::drop3d(&p)?, serde_json::to_value(&p)?))
+        }
+        other if SCENES.contains(&other) => {
+            let n = n.unwrap_or_else(|| default_n(other));
+            let scene = build_scene(other, n, eps, params)?;
+            let density = vec![1.0; scene.mesh.bodies.len()];
+            let v0 = vec![0.0; scene.x0.len()];
+            let json = match params_json(other, n, eps, params)? {
+                Some(j) => j,
+                None => serde_json::json!({ "n": n, "eps": eps, "params": params }),
+            };
+            Ok((
+                DynamicScene {
+                    scene,
+                    density,
+                    v0,
+                    dt: 0.0,
+                    steps: 0,
+                },
+                json,
+            ))
+        }
+        other => bail!(
+            "unknown scene {other:?} (dynamic: {}; static, with --dynamic: {})",
+            DYNAMIC_SCENES.join(", "),
+            SCENES.join(", ")
+        ),
+    }
+}
+
+/// A non-negative integer parameter given as a number.
+fn count(scene: &str, name: &str, v: f64) -> Result<usize> {
+    if v >= 0.0 && v.fract() == 0.0 && v <= 1e9 {
+        Ok(v as usize)
+    } else {
+        bail!("scene {scene}: parameter {name:?} = {v} must be a non-negative integer")
+    }
+}
+
+/// The smallest mesh level of dynamic scene `name` whose h is at most `h` (drop, collide: the
+/// ring's cells around; drop3d: its level; the static scenes: [`n_for_h`]).
+pub fn dynamic_n_for_h(name: &str, h: f64, params: &BTreeMap<String, f64>) -> Result<usize> {
+    if !DYNAMIC_SCENES.contains(&name) {
+        return n_for_h(name, h, params);
+    }
+    if !(h.is_finite() && h > 0.0) {
+        bail!("h = {h}: a mesh size must be finite and > 0");
+    }
+    let size =
+        |n: usize| -> Result<f64> { Ok(build_dynamic_scene(name, Some(n), None, params)?.scene.h) };
+    let start = if name == "drop3d" { 1 } else { 8 };
+    for n in start..=400 {
+        if size(n)? <= h {
+            return Ok(n);
+        }
+    }
+    bail!("h = {h} needs a level above the scene's n ≤ 400")
+}
+
+/// What a dynamic run measured (summary.json and the dynamic sweep rows).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DynamicMetrics {
+    /// Steps taken.
+    pub steps_taken: usize,
+    /// `completed`, or the outer-loop status that stopped the run.
+    pub status: String,
+    /// Steps whose outer loop ended `max_outer_iterations` (accepted, not converged).
+    pub steps_max_outer: usize,
+    /// Steps whose outer loop ended `line_search_failed` (accepted).
+    pub steps_line_search_failed: usize,
+    /// Every outer iterate of every step passed the exact admissibility check.
+    pub all_admissible: bool,
+    /// Smallest end-of-step distance.
+    pub min_distance: f64,
+    /// E_0.
+    pub initial_energy: f64,
+    /// E at the end.
+    pub final_energy: f64,
+    /// Kinetic energy at the end.
+    pub final_kinetic: f64,
+    /// `max_n (E_n − E_(n−1))` (negative: E decreased at every step).
+    pub max_energy_increase: f64,
+    /// `(E_end − E_0)/|E_0|`.
+    pub energy_drift: f64,
+    /// `max_n |P_n − P_0|` when the scene has no fixed vertex and no potential (external)
+    /// energy — then momentum is conserved and this is its error; `None` otherwise.
+    pub momentum_error: Option<f64>,
+    /// Total mass of the free vertices.
+    pub free_mass: f64,
+    /// Contact force statistics over the last quarter of the steps.
+    pub rest: Option<contactlab::dynamics::RestForce>,
+    /// Outer iterations summed over the steps.
+    pub outer_iterations: usize,
+    /// The largest number of outer iterations of one step.
+    pub max_outer_per_step: usize,
+    /// Wall time of the stepping.
+    pub wall_time_s: f64,
+}
+
+/// The fraction of the steps (the last ones) over which [`DynamicMetrics::rest`] is taken.
+pub const REST_FRACTION: f64 = 0.25;
+
+/// Runs `ds` for `dyn_settings` with the case's backend, accuracy and pruning, calling
+/// `observer` per step.
+pub fn execute_dynamic(
+    ds: &mut DynamicScene,
+    cs: &CaseSettings,
+    dyn_settings: &DynamicSettings,
+    qp: &QpSettings,
+    observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
+) -> Result<(DynamicResult, DynamicMetrics)> {
+    let mut backend = backend_from_name(&cs.backend, qp)?;
+    let mut settings = OuterSettings {
+        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+        max_outer: cs.max_outer,
+        pruning: cs.pruning,
+        ..Default::default()
+    };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
+    let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density)?;
+    let mut system = System {
+        mesh: &ds.scene.mesh,
+        energy: &mut ds.scene.energy,
+        eps: ds.scene.eps,
+        mass,
+    };
+    let res = simulate(
+        &mut system,
+        &ds.scene.x0,
+        &ds.v0,
+        backend.as_mut(),
+        &settings,
+        dyn_settings,
+        observer,
+    )?;
+    let free_mass = system.free_mass();
+    let has_potential = system
+        .energy
+        .terms
+        .iter()
+        .any(|t| POTENTIAL_TERMS.contains(&t.name()));
+    let conserves = !has_potential && !ds.scene.mesh.fixed.iter().any(|&f| f);
+    let m = dynamic_metrics(&res, free_mass, conserves);
+    Ok((res, m))
+}
+
+/// [`DynamicMetrics`] of a finished run.
+pub fn dynamic_metrics(res: &DynamicResult, free_mass: f64, conserves: bool) -> DynamicMetrics {
+    let r = &res.records;
+    let (e0, last) = (r[0].total, r.last().expect("step 0 is recorded"));
+    let p0 = [r[0].momentum_x, r[0].momentum_y, r[0].momentum_z];
+    let steps = &r[1..];
+    DynamicMetrics {
+        steps_taken: res.steps,
+        status: res
+            .stopped_by
+            .map_or("completed".to_string(), |s| s.as_str().to_string()),
+        steps_max_outer: steps
+            .iter()
+            .filter(|s| s.status == "max_outer_iterations")
+            .count(),
+        steps_line_search_failed: steps
+            .iter()
+            .filter(|s| s.status == "line_search_failed")
+            .count(),
+        all_admissible: r.iter().all(|s| s.admissible),
+        min_distance: r
+            .iter()
+            .map(|s| s.min_distance)
+            .fold(f64::INFINITY, f64::min),
+        initial_energy: e0,
+        final_energy: last.total,
+        final_kinetic: last.kinetic,
+        max_energy_increase: r
+            .windows(2)
+            .map(|w| w[1].total - w[0].total)
+            .fold(f64::NEG_INFINITY, f64::max),
+        energy_drift: (last.total - e0) / e0.abs().max(f64::MIN_POSITIVE),
+        momentum_error: conserves.then(|| {
+            r.iter()
+                .map(|s| {
+                    ((s.momentum_x - p0[0]).powi(2)
+                        + (s.momentum_y - p0[1]).powi(2)
+                        + (s.momentum_z - p0[2]).powi(2))
+                    .sqrt()
+                })
+                .fold(0.0, f64::max)
+        }),
+        free_mass,
+        rest: rest_force(r, REST_FRACTION),
+        outer_iterations: steps.iter().map(|s| s.outer_iterations).sum(),
+        max_outer_per_step: steps.iter().map(|s| s.outer_iterations).max().unwrap_or(0),
+        wall_time_s: res.wall_time_s,
     }
 }

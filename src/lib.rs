@@ -19,6 +19,7 @@ pub mod bvh;
 pub mod capture;
 pub mod contact;
 pub mod diagnostics;
+pub mod dynamics;
 pub mod energy;
 pub mod geometry;
 pub mod mesh;

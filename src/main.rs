@@ -30,6 +30,7 @@ struct Cli {
 }
 
 mod case;
+mod dynamic_cmd;
 mod export_cmd;
 mod plot_cmd;
 mod scaling_cmd;
@@ -54,8 +55,10 @@ enum Command {
 }
 
 #[derive(clap::Args, Clone)]
-struct RunArgs {
-    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D).
+#[allow(missing_docs)]
+pub(crate) struct RunArgs {
+    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
+    /// also drop, collide (2D), drop3d (3D).
     #[arg(default_value = "balloons")]
     scene: String,
     /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
@@ -122,6 +125,20 @@ struct RunArgs {
     /// No progress line.
     #[arg(long)]
     quiet: bool,
+    /// Time stepping (§6): each step minimizes ½∫m|v_(i+1) − v_i|² + J over A_(h,ε) with the
+    /// same outer loop (DYNAMICS_NOTES.md).
+    #[arg(long)]
+    dynamic: bool,
+    /// Time step (--dynamic; default: the dynamic scene's).
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Number of time steps (--dynamic; default: the dynamic scene's).
+    #[arg(long)]
+    steps: Option<usize>,
+    /// Time-stepping scheme: euler (implicit Euler, default) or newmark (average
+    /// acceleration).
+    #[arg(long)]
+    scheme: Option<String>,
 }
 
 fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
@@ -183,6 +200,18 @@ struct Summary {
 }
 
 fn run_cmd(a: RunArgs) -> Result<()> {
+    if a.dynamic {
+        return dynamic_cmd::run_dynamic(&a);
+    }
+    if a.dt.is_some() || a.steps.is_some() || a.scheme.is_some() {
+        bail!("--dt, --steps and --scheme are options of a dynamic run: add --dynamic");
+    }
+    if case::DYNAMIC_SCENES.contains(&a.scene.as_str()) {
+        bail!(
+            "scene {:?} is a dynamic scene: run it with --dynamic [--dt DT --steps K --scheme euler|newmark]",
+            a.scene
+        );
+    }
     let n = a.n.unwrap_or_else(|| case::default_n(&a.scene));
     let (scene, params) = match a.scene.as_str() {
         "balloons" => {

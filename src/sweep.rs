@@ -16,6 +16,7 @@
 use crate::case::{self, build_scene, f, CaseSettings, RUN_COLUMNS};
 use anyhow::{bail, Context, Result};
 use contactlab::diagnostics::h1_distance;
+use contactlab::dynamics::{DynamicSettings, Scheme};
 use contactlab::outer::Pruning;
 use contactlab::presets::Accuracy;
 use contactlab_solvers::BACKEND_NAMES;
@@ -204,6 +205,28 @@ pub struct SceneBlock {
     /// Overrides of the file's defaults.
     #[serde(flatten)]
     pub common: Common,
+    /// Time stepping (§6): the block's runs are dynamic runs (a sweep file is all static or
+    /// all dynamic: the two kinds of row have different columns).
+    #[serde(default)]
+    pub dynamic: bool,
+    /// Time steps (dynamic; default: the scene's own).
+    #[serde(default)]
+    pub dt: Vec<f64>,
+    /// Number of steps (dynamic; default: the scene's own).
+    pub steps: Option<usize>,
+    /// Schemes, `euler` and/or `newmark` (dynamic; default `euler`).
+    pub scheme: Option<OneOrMany<String>>,
+}
+
+/// The time stepping of a dynamic run.
+#[derive(Clone, Debug)]
+pub struct DynamicSpec {
+    /// Δt.
+    pub dt: f64,
+    /// Steps.
+    pub steps: usize,
+    /// Scheme.
+    pub scheme: Scheme,
 }
 
 /// A sweep file.
@@ -244,6 +267,8 @@ pub struct RunSpec {
     pub settings: CaseSettings,
     /// Reference run, when the sweep asks for errors.
     pub reference: Option<ReferenceSpec>,
+    /// Time stepping, for a dynamic run.
+    pub dynamic: Option<DynamicSpec>,
 }
 
 impl RunSpec {
@@ -281,6 +306,47 @@ pub fn header() -> Vec<&'static str> {
         .collect()
 }
 
+/// The columns of a dynamic run's row, after [`CASE_COLUMNS`] (DYNAMICS_NOTES.md).
+pub const DYNAMIC_COLUMNS: [&str; 28] = [
+    "dim",
+    "h",
+    "eps",
+    "dt",
+    "steps",
+    "scheme",
+    "qp_tol",
+    "tol_j",
+    "status",
+    "steps_taken",
+    "steps_max_outer",
+    "all_admissible",
+    "min_distance",
+    "initial_energy",
+    "final_energy",
+    "final_kinetic",
+    "max_energy_increase",
+    "energy_drift",
+    "momentum_error",
+    "force_mean_rest",
+    "force_jump_rest",
+    "force_std_rest",
+    "weight_ratio_rest",
+    "outer_iterations",
+    "max_outer_per_step",
+    "wall_time_s",
+    "t_total_s",
+    "error",
+];
+
+/// The header of a dynamic sweep's CSV.
+pub fn dynamic_header() -> Vec<&'static str> {
+    CASE_COLUMNS
+        .iter()
+        .chain(DYNAMIC_COLUMNS.iter())
+        .copied()
+        .collect()
+}
+
 /// Reads and validates a sweep file, and expands it into runs in file order (scene block, n,
 /// ε rule, backend, accuracy). Every name is checked before any run starts.
 pub fn load(path: &Path) -> Result<Vec<RunSpec>> {
@@ -298,7 +364,23 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
     }
     let mut runs = Vec::new();
     let mut seen = BTreeSet::new();
+    let dynamic = file.scene[0].dynamic;
+    if let Some(b) = file.scene.iter().find(|b| b.dynamic != dynamic) {
+        bail!(
+            "scene block {:?} has dynamic = {} but the first block has dynamic = {dynamic}: a \
+             sweep file is all static or all dynamic (their CSVs have different columns)",
+            b.name,
+            b.dynamic
+        );
+    }
     for (bi, b) in file.scene.iter().enumerate() {
+        if !b.dynamic && (!b.dt.is_empty() || b.steps.is_some() || b.scheme.is_some()) {
+            bail!(
+                "scene block {} ({}): dt, steps and scheme need dynamic = true",
+                bi + 1,
+                b.name
+            );
+        }
         let pick = |o: &Option<Vec<String>>, d: &Option<Vec<String>>, dflt: &str| {
             o.clone()
                 .or_else(|| d.clone())
@@ -395,9 +477,34 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         }
         let mut levels = b.n.clone();
         for &h in &b.h {
-            levels.push(
+            let n = if b.dynamic {
+                crate::case::dynamic_n_for_h(&b.name, h, &b.params)
+            } else {
                 crate::case::n_for_h(&b.name, h, &b.params)
-                    .with_context(|| format!("scene block {} ({})", bi + 1, b.name))?,
+            };
+            levels.push(n.with_context(|| format!("scene block {} ({})", bi + 1, b.name))?);
+        }
+        let schemes: Vec<Scheme> = b
+            .scheme
+            .as_ref()
+            .map(|s| s.to_vec())
+            .unwrap_or_else(|| vec!["euler".into()])
+            .iter()
+            .map(|s| {
+                Scheme::from_name(s).with_context(|| {
+                    format!(
+                        "scene block {} ({}): scheme {s:?}: expected euler or newmark",
+                        bi + 1,
+                        b.name
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+        if b.dynamic && reference.is_some() {
+            bail!(
+                "scene block {} ({}): a reference run is for static sweeps",
+                bi + 1,
+                b.name
             );
         }
         if levels.is_empty() {
@@ -409,46 +516,78 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         }
         for &n in &levels {
             // building the scene checks its name and parameters and gives h
-            let h = build_scene(&b.name, n, None, &b.params)
-                .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
-                .h;
+            let (h, dyns) = if b.dynamic {
+                let ds = crate::case::build_dynamic_scene(&b.name, Some(n), None, &b.params)
+                    .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?;
+                let dts = if b.dt.is_empty() {
+                    vec![ds.dt]
+                } else {
+                    b.dt.clone()
+                };
+                let steps = b.steps.unwrap_or(ds.steps);
+                let mut dyns = Vec::new();
+                for &dt in &dts {
+                    for &scheme in &schemes {
+                        let d = DynamicSettings { dt, steps, scheme };
+                        d.validate().map_err(|e| {
+                            anyhow::anyhow!("scene block {} ({}): {e}", bi + 1, b.name)
+                        })?;
+                        dyns.push(Some(DynamicSpec { dt, steps, scheme }));
+                    }
+                }
+                (ds.scene.h, dyns)
+            } else {
+                let h = build_scene(&b.name, n, None, &b.params)
+                    .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
+                    .h;
+                (h, vec![None])
+            };
             for rule in &rules {
-                for be in &backends {
-                    for acc in &accuracy {
-                        let settings = CaseSettings {
-                            backend: be.clone(),
-                            accuracy: *acc,
-                            pruning,
-                            tol_j,
-                            max_outer,
-                            max_inner,
-                        };
-                        let mut spec = RunSpec {
-                            key: String::new(),
-                            scene: b.name.clone(),
-                            n,
-                            h,
-                            eps_rule: rule.label(),
-                            eps: rule.eval(h),
-                            params: b.params.clone(),
-                            settings,
-                            reference: reference.clone(),
-                        };
-                        spec.key = format!(
-                            "{}|{}|{}|{}|tolj={}|max={}{}",
-                            spec.group_key(),
-                            be,
-                            acc.as_str(),
-                            pruning.as_str(),
-                            tol_j.map_or("preset".into(), |t| format!("{t:?}")),
-                            max_outer,
-                            // only when set, so that keys of sweeps without it stay as they were
-                            max_inner.map_or(String::new(), |k| format!("|inner={k}"))
-                        );
-                        if !seen.insert(spec.key.clone()) {
-                            bail!("run {} appears twice in the sweep file", spec.key);
+                for dy in &dyns {
+                    for be in &backends {
+                        for acc in &accuracy {
+                            let settings = CaseSettings {
+                                backend: be.clone(),
+                                accuracy: *acc,
+                                pruning,
+                                tol_j,
+                                max_outer,
+                                max_inner,
+                            };
+                            let mut spec = RunSpec {
+                                key: String::new(),
+                                scene: b.name.clone(),
+                                n,
+                                h,
+                                eps_rule: rule.label(),
+                                eps: rule.eval(h),
+                                params: b.params.clone(),
+                                settings,
+                                reference: reference.clone(),
+                                dynamic: dy.clone(),
+                            };
+                            spec.key = format!(
+                                "{}{}|{}|{}|{}|tolj={}|max={}{}",
+                                spec.group_key(),
+                                dy.as_ref().map_or(String::new(), |d| format!(
+                                    "|dt={:?}|steps={}|{}",
+                                    d.dt,
+                                    d.steps,
+                                    d.scheme.as_str()
+                                )),
+                                be,
+                                acc.as_str(),
+                                pruning.as_str(),
+                                tol_j.map_or("preset".into(), |t| format!("{t:?}")),
+                                max_outer,
+                                // only when set, so that keys of sweeps without it stay as they were
+                                max_inner.map_or(String::new(), |k| format!("|inner={k}"))
+                            );
+                            if !seen.insert(spec.key.clone()) {
+                                bail!("run {} appears twice in the sweep file", spec.key);
+                            }
+                            runs.push(spec);
                         }
-                        runs.push(spec);
                     }
                 }
             }
@@ -484,7 +623,7 @@ struct Reference {
 
 /// Reads the rows already in `path` (for --resume): the keys, after dropping a torn last line
 /// (one without its newline, left by a kill during a write). Errors when the header differs.
-fn existing_keys(path: &Path) -> Result<BTreeSet<String>> {
+fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
     let mut bytes = std::fs::read(path).with_context(|| format!("reading {path:?}"))?;
     if let Some(end) = bytes.iter().rposition(|&b| b == b'\n') {
         if end + 1 < bytes.len() {
@@ -505,13 +644,12 @@ fn existing_keys(path: &Path) -> Result<BTreeSet<String>> {
     }
     let mut rdr = csv::Reader::from_reader(bytes.as_slice());
     let h: Vec<String> = rdr.headers()?.iter().map(|s| s.to_string()).collect();
-    let want = header();
     if h != want {
         bail!(
             "{path:?}: its header is not this version's sweep header; move it away or write to \
              another --out (first difference at column {})",
             h.iter()
-                .zip(&want)
+                .zip(want)
                 .position(|(a, b)| a != b)
                 .unwrap_or(h.len().min(want.len()))
                 + 1
@@ -579,6 +717,96 @@ fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static s
     m
 }
 
+/// Runs one dynamic spec into its row (never panics: a panic becomes a `panic` row).
+fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
+    let t = Instant::now();
+    let d = spec.dynamic.as_ref().expect("a dynamic spec");
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+        let mut ds = crate::case::build_dynamic_scene(
+            &spec.scene,
+            Some(spec.n),
+            Some(spec.eps),
+            &spec.params,
+        )?;
+        let qp = spec.settings.accuracy.qp_settings(&spec.settings.backend);
+        let dyn_settings = DynamicSettings {
+            dt: d.dt,
+            steps: d.steps,
+            scheme: d.scheme,
+        };
+        let (_, mt) = case::execute_dynamic(
+            &mut ds,
+            &spec.settings,
+            &dyn_settings,
+            &qp,
+            &mut |_, _, _| {},
+        )?;
+        let mut m = BTreeMap::new();
+        m.insert("dim", ds.scene.mesh.dim.to_string());
+        m.insert("h", f(ds.scene.h));
+        m.insert("eps", f(ds.scene.eps));
+        m.insert("qp_tol", f(qp.eps_abs));
+        m.insert(
+            "tol_j",
+            f(spec
+                .settings
+                .tol_j
+                .unwrap_or(spec.settings.accuracy.tol_j())),
+        );
+        m.insert("status", mt.status.clone());
+        m.insert("steps_taken", mt.steps_taken.to_string());
+        m.insert("steps_max_outer", mt.steps_max_outer.to_string());
+        m.insert("all_admissible", mt.all_admissible.to_string());
+        m.insert("min_distance", f(mt.min_distance));
+        m.insert("initial_energy", f(mt.initial_energy));
+        m.insert("final_energy", f(mt.final_energy));
+        m.insert("final_kinetic", f(mt.final_kinetic));
+        m.insert("max_energy_increase", f(mt.max_energy_increase));
+        m.insert("energy_drift", f(mt.energy_drift));
+        m.insert("momentum_error", mt.momentum_error.map_or(String::new(), f));
+        if let Some(r) = &mt.rest {
+            m.insert("force_mean_rest", f(r.mean));
+            m.insert("force_jump_rest", f(r.max_jump_rel));
+            m.insert("force_std_rest", f(r.std_rel));
+            if matches!(spec.scene.as_str(), "drop" | "drop3d") {
+                let g = spec.params.get("g").copied().unwrap_or(9.81);
+                m.insert("weight_ratio_rest", f(r.mean / (mt.free_mass * g)));
+            }
+        }
+        m.insert("outer_iterations", mt.outer_iterations.to_string());
+        m.insert("max_outer_per_step", mt.max_outer_per_step.to_string());
+        m.insert("wall_time_s", f(mt.wall_time_s));
+        Ok(m)
+    }));
+    let mut m = match out {
+        Ok(Ok(m)) => m,
+        Ok(Err(e)) => {
+            let mut m = BTreeMap::new();
+            m.insert("status", "error".to_string());
+            m.insert("error", format!("{e:#}"));
+            m
+        }
+        Err(p) => {
+            let msg = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "panic".into());
+            let mut m = BTreeMap::new();
+            m.insert("status", "panic".to_string());
+            m.insert("error", msg);
+            m
+        }
+    };
+    m.insert("dt", f(d.dt));
+    m.insert("steps", d.steps.to_string());
+    m.insert("scheme", d.scheme.as_str().to_string());
+    m.entry("h").or_insert_with(|| f(spec.h));
+    m.entry("eps").or_insert_with(|| f(spec.eps));
+    m.insert("t_total_s", f(t.elapsed().as_secs_f64()));
+    m
+}
+
 /// Solves the reference of a group.
 fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
     let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
@@ -610,6 +838,8 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         bail!("--jobs 0: need at least one job");
     }
     let runs = load(&a.file)?;
+    let dynamic = runs.first().is_some_and(|r| r.dynamic.is_some());
+    let hdr_cols = if dynamic { dynamic_header() } else { header() };
     if a.list {
         for r in &runs {
             if in_shard(&r.key, a.shard) {
@@ -625,7 +855,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
                 a.out
             );
         }
-        existing_keys(&a.out)?
+        existing_keys(&a.out, &hdr_cols)?
     } else {
         BTreeSet::new()
     };
@@ -646,7 +876,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         .open(&a.out)
         .with_context(|| format!("opening {:?}", a.out))?;
     if file.metadata()?.len() == 0 {
-        let hdr: Vec<String> = header().iter().map(|s| s.to_string()).collect();
+        let hdr: Vec<String> = hdr_cols.iter().map(|s| s.to_string()).collect();
         file.write_all(&csv_line(&hdr)?)?;
         file.flush()?;
     }
@@ -706,7 +936,11 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
     let total = todo.len();
     let result: Result<()> = pool.install(|| {
         todo.par_iter().try_for_each(|r| -> Result<()> {
-            let mut m = run_one(r, refs.get(&r.group_key()));
+            let mut m = if dynamic {
+                run_one_dynamic(r)
+            } else {
+                run_one(r, refs.get(&r.group_key()))
+            };
             m.insert("key", r.key.clone());
             m.insert("scene", r.scene.clone());
             m.insert("n", r.n.to_string());
@@ -715,7 +949,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
             m.insert("backend", r.settings.backend.clone());
             m.insert("accuracy", r.settings.accuracy.as_str().to_string());
             m.insert("pruning", r.settings.pruning.as_str().to_string());
-            let values: Vec<String> = header()
+            let values: Vec<String> = hdr_cols
                 .iter()
                 .map(|c| m.get(c).cloned().unwrap_or_default())
                 .collect();
@@ -745,7 +979,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
     result?;
     drop(writer);
     // complete: rewrite in the sweep file's order
-    let present = existing_keys(&a.out)?;
+    let present = existing_keys(&a.out, &hdr_cols)?;
     if mine.iter().all(|r| present.contains(&r.key)) {
         sort_csv(&a.out, &mine)?;
     }
@@ -908,5 +1142,49 @@ mod tests {
             parse_shard("0/2").is_err() && parse_shard("3/2").is_err() && parse_shard("x").is_err()
         );
         assert_eq!(parse_shard("2/3"), Ok((2, 3)));
+    }
+
+    #[test]
+    fn sweep_dynamic_blocks_expand_with_their_own_keys_and_reject_bad_input() {
+        let runs = parse(
+            r#"
+            [[scene]]
+            name = "collide"
+            dynamic = true
+            n = [16]
+            dt = [0.01, 0.005]
+            steps = 4
+            scheme = ["euler", "newmark"]
+            "#,
+        )
+        .unwrap();
+        assert_eq!(runs.len(), 4);
+        assert_eq!(
+            runs[0].key,
+            "collide|n=16|eps=0.1*h^1.0||dt=0.01|steps=4|euler|clarabel|default|lazy|tolj=preset|max=2000"
+        );
+        assert!(runs.iter().all(|r| r.dynamic.is_some()));
+        assert_eq!(runs[3].dynamic.as_ref().unwrap().scheme, Scheme::Newmark);
+        // the scene's own dt and steps by default; h picks the ring's level
+        let runs = parse("[[scene]]\nname = \"drop\"\ndynamic = true\nh = [0.2]\n").unwrap();
+        let d = runs[0].dynamic.as_ref().unwrap();
+        assert_eq!((d.dt, d.steps, d.scheme), (0.02, 300, Scheme::Euler));
+        assert!(runs[0].h <= 0.2);
+        let err = |t: &str| parse(t).unwrap_err().to_string();
+        let e = err("[[scene]]\nname = \"collide\"\ndynamic = true\nn = [16]\ndt = [0.0]\n");
+        assert!(e.contains("dt must be finite and > 0, got 0"), "{e}");
+        let e = err("[[scene]]\nname = \"collide\"\ndynamic = true\nn = [16]\nscheme = \"rk4\"\n");
+        assert!(e.contains("\"rk4\""), "{e}");
+        let e = err("[[scene]]\nname = \"ring\"\nn = [20]\ndt = [0.1]\n");
+        assert!(e.contains("need dynamic = true"), "{e}");
+        let e = err(
+            "[[scene]]\nname = \"ring\"\nn = [20]\n[[scene]]\nname = \"collide\"\ndynamic = true\nn = [16]\n",
+        );
+        assert!(e.contains("all static or all dynamic"), "{e}");
+        // a static scene run dynamically needs dt and steps (no defaults)
+        let e = err("[[scene]]\nname = \"ring\"\ndynamic = true\nn = [20]\n");
+        assert!(e.contains("dt must be finite and > 0, got 0"), "{e}");
+        assert_ne!(dynamic_header(), header());
+        assert_eq!(&dynamic_header()[..CASE_COLUMNS.len()], &CASE_COLUMNS[..]);
     }
 }

@@ -18,7 +18,7 @@
 //!   chunks are concatenated in chunk order.
 
 #[cfg(test)]
-mod fd_test;
+pub(crate) mod fd_test;
 pub mod gas;
 pub mod gas3d;
 pub mod gravity;

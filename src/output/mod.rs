@@ -7,6 +7,7 @@
 
 pub mod loglog;
 pub mod svg;
+pub mod timeseries;
 pub mod vtk;
 
 use std::ffi::OsString;

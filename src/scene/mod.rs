@@ -2,6 +2,7 @@
 
 pub mod balloons;
 pub mod balloons3d;
+pub mod dynamic;
 pub mod ring;
 pub mod rod;
 pub mod sheets;

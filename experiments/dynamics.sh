@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The dynamic case (issue 6): the dt / h sweep of experiments/dynamics.toml into
+# results/dynamics.csv (resumable), and the contact force of the drop scene over time
+# (implicit Euler: results/dynamics.svg; Newmark: results/dynamics_newmark.svg), from
+# `contactlab run drop --dynamic` with the scene's defaults (dt = 0.02, 300 steps).
+# Usage: bash experiments/dynamics.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/ensure-cmake.sh
+[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
+bin=${CONTACTLAB_BIN:-target/release/contactlab}
+"$bin" sweep experiments/dynamics.toml --out results/dynamics.csv --jobs 1 --resume
+for s in euler newmark; do
+  "$bin" run drop --dynamic --scheme "$s" --quiet --out "runs/dynamics-drop-$s"
+done
+cp runs/dynamics-drop-euler/contact_force.svg results/dynamics.svg
+cp runs/dynamics-drop-newmark/contact_force.svg results/dynamics_newmark.svg

@@ -1,0 +1,309 @@
+//! `contactlab run SCENE --dynamic --dt DT --steps K [--scheme euler|newmark]`: time stepping
+//! (§6) and its run directory:
+//!
+//! - `history.csv`: one row per step ([`StepRecord`]: step, time, kinetic, elastic,
+//!   potential, total, momentum_x/y/z, min_distance, admissible, active_contacts,
+//!   contact_force, outer_iterations, status, step_energy, wall_time_s);
+//! - `contacts.csv`: per step, the active pairs (step, time, kind, first, second, force,
+//!   distance);
+//! - `frames/frame_NNNNN.vtu` and `frames.pvd` (timestep = the step's time: ParaView plays it
+//!   as an animation), with point data `speed`;
+//! - `energy.svg` (kinetic, elastic, potential, total against time), `contact_force.svg`
+//!   (total contact force against time, and the weight of the free bodies when the scene has
+//!   gravity);
+//! - `summary.json` (the settings and [`DynamicMetrics`]).
+
+use crate::case::{self, CaseSettings, DynamicMetrics, DYNAMIC_SCENES};
+use crate::RunArgs;
+use anyhow::{bail, Context, Result};
+use contactlab::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
+use contactlab::outer::OuterSettings;
+use contactlab::output::svg::write_svg;
+use contactlab::output::timeseries::{timeseries_svg, Line};
+use contactlab::output::vtk::{write_vtu, PvdSeries};
+use contactlab::output::write_atomic;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(serde::Serialize)]
+struct ContactRow {
+    step: usize,
+    time: f64,
+    kind: &'static str,
+    first: usize,
+    second: usize,
+    force: f64,
+    distance: f64,
+}
+
+#[derive(serde::Serialize)]
+struct DynamicSummary {
+    scene: String,
+    dynamic: bool,
+    dim: usize,
+    n: Option<usize>,
+    h: f64,
+    eps: f64,
+    dt: f64,
+    steps: usize,
+    scheme: &'static str,
+    density: Vec<f64>,
+    backend: String,
+    pruning: &'static str,
+    accuracy: &'static str,
+    qp_tol: f64,
+    /// `m g` of the free bodies for the scenes with gravity `g` (drop, drop3d).
+    weight: Option<f64>,
+    metrics: DynamicMetrics,
+    params: serde_json::Value,
+    settings: OuterSettings,
+}
+
+/// Parses `--scheme`.
+pub fn parse_scheme(s: &str) -> Result<Scheme> {
+    Scheme::from_name(s).with_context(|| format!("--scheme {s:?}: expected one of euler, newmark"))
+}
+
+/// `contactlab run … --dynamic`.
+pub fn run_dynamic(a: &RunArgs) -> Result<()> {
+    if !a.perturb.is_empty() || a.heights.is_some() {
+        bail!("--perturb and --heights set the balloons' static start; they are not available with --dynamic");
+    }
+    let scheme = parse_scheme(a.scheme.as_deref().unwrap_or("euler"))?;
+    let mut params = case::parse_params(&a.params)?;
+    if let Some(mu) = a.mu {
+        params.insert("mu".into(), mu);
+    }
+    if let Some(c) = a.c {
+        if !a.scene.starts_with("balloons") {
+            bail!(
+                "--c (a gas constant) is an option of the balloons scenes, not of {:?}",
+                a.scene
+            );
+        }
+        params.insert("c".into(), c);
+    }
+    let (mut ds, params_json) = case::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
+    let is_dynamic_scene = DYNAMIC_SCENES.contains(&a.scene.as_str());
+    let dt = a.dt.unwrap_or(ds.dt);
+    let steps = a.steps.unwrap_or(ds.steps);
+    if !is_dynamic_scene && (a.dt.is_none() || a.steps.is_none()) {
+        bail!(
+            "scene {:?} is static: with --dynamic give --dt and --steps (it runs with density 1 per body and zero initial velocity)",
+            a.scene
+        );
+    }
+    let dyn_settings = DynamicSettings { dt, steps, scheme };
+    dyn_settings
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--dt/--steps: {e}"))?;
+    let cs = CaseSettings {
+        backend: a.backend.clone(),
+        accuracy: a.accuracy,
+        pruning: a.pruning,
+        tol_j: a.tol_j,
+        max_outer: a.max_outer,
+        max_inner: Some(a.max_inner),
+    };
+    if a.max_inner == 0 {
+        bail!("--max-inner must be >= 1, got 0");
+    }
+    let mut qps = a.accuracy.qp_settings(&a.backend);
+    if let Some(t) = a.qp_tol {
+        qps.eps_abs = t;
+        qps.eps_rel = t;
+    }
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-dynamic-{}", a.scene, scheme.as_str())));
+    let frames = out.join("frames");
+    std::fs::create_dir_all(&frames)
+        .with_context(|| format!("cannot create run directory {}", frames.display()))?;
+    let mut hist = csv::Writer::from_path(out.join("history.csv"))?;
+    let mut contacts = csv::Writer::from_path(out.join("contacts.csv"))?;
+    let mut pvd = PvdSeries::default();
+    let mut records: Vec<StepRecord> = Vec::new();
+    let mut io_err: Option<anyhow::Error> = None;
+    let mesh = ds.scene.mesh.clone();
+    let dim = mesh.dim;
+    let eps = ds.scene.eps;
+    let every = a.frame_every.max(1);
+    let mut observer = |rec: &StepRecord,
+                        forces: &[PairForce],
+                        st: &contactlab::dynamics::DynamicState| {
+        records.push(rec.clone());
+        let mut step = || -> Result<()> {
+            hist.serialize(rec)?;
+            hist.flush()?;
+            for f in forces.iter().filter(|f| f.active) {
+                let (first, second) = f.pair.indices();
+                contacts.serialize(ContactRow {
+                    step: rec.step,
+                    time: rec.time,
+                    kind: f.pair.kind(),
+                    first,
+                    second,
+                    force: f.force,
+                    distance: f.distance,
+                })?;
+            }
+            contacts.flush()?;
+            if rec.step.is_multiple_of(every) || rec.step == steps {
+                let speed: Vec<f64> =
+                    st.v.chunks(dim)
+                        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
+                        .collect();
+                let name = format!("frame_{:05}.vtu", rec.step);
+                let tris = if dim == 3 {
+                    &mesh.faces
+                } else {
+                    &mesh.triangles
+                };
+                write_vtu(
+                    &frames.join(&name),
+                    dim,
+                    &st.x,
+                    &mesh.edges,
+                    tris,
+                    &mesh.tets,
+                    &[("speed", &speed)],
+                )?;
+                pvd.push(rec.time, format!("frames/{name}"));
+                pvd.write(&out.join("frames.pvd"))?;
+            }
+            Ok(())
+        };
+        if let Err(e) = step() {
+            io_err.get_or_insert(e);
+        }
+        if !a.quiet {
+            eprint!(
+                "\r[{} {}] step {:>5}/{steps} t = {:.4}  E = {:.8e}  K = {:.3e}  min dist/eps = {:.5}  contacts {:>4}  F = {:.4e}  outer {:>4} {}   ",
+                scheme.as_str(), a.backend, rec.step, rec.time, rec.total, rec.kinetic, rec.min_distance / eps, rec.active_contacts, rec.contact_force, rec.outer_iterations, rec.status
+            );
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let (res, metrics) = case::execute_dynamic(&mut ds, &cs, &dyn_settings, &qps, &mut observer)?;
+    #[allow(clippy::drop_non_drop)] // ends the closure's borrows
+    drop(observer);
+    if !a.quiet {
+        eprintln!();
+    }
+    if let Some(e) = io_err {
+        return Err(e.context("writing the run directory"));
+    }
+    hist.flush()?;
+    contacts.flush()?;
+    let g = params.get("g").copied().unwrap_or(9.81);
+    let weight = matches!(a.scene.as_str(), "drop" | "drop3d").then(|| metrics.free_mass * g);
+    // pictures
+    let series = |f: fn(&StepRecord) -> f64| -> Vec<(f64, f64)> {
+        records.iter().map(|r| (r.time, f(r))).collect()
+    };
+    let title = format!(
+        "{} {} dt={} steps={} backend={}",
+        a.scene,
+        scheme.as_str(),
+        dt,
+        res.steps,
+        a.backend
+    );
+    let energy = timeseries_svg(
+        &[
+            Line {
+                label: "total".into(),
+                points: series(|r| r.total),
+                dashed: false,
+            },
+            Line {
+                label: "kinetic".into(),
+                points: series(|r| r.kinetic),
+                dashed: false,
+            },
+            Line {
+                label: "elastic".into(),
+                points: series(|r| r.elastic),
+                dashed: false,
+            },
+            Line {
+                label: "potential".into(),
+                points: series(|r| r.potential),
+                dashed: false,
+            },
+        ],
+        &title,
+        "time",
+        "energy",
+    );
+    write_svg(&out.join("energy.svg"), &energy)?;
+    let mut lines = vec![Line {
+        label: "total contact force Σμ".into(),
+        points: series(|r| r.contact_force),
+        dashed: false,
+    }];
+    if let Some(w) = weight {
+        let t1 = records.last().map_or(0.0, |r| r.time);
+        lines.push(Line {
+            label: "weight m g".into(),
+            points: vec![(0.0, w), (t1, w)],
+            dashed: true,
+        });
+    }
+    write_svg(
+        &out.join("contact_force.svg"),
+        &timeseries_svg(&lines, &title, "time", "force"),
+    )?;
+    let summary = DynamicSummary {
+        scene: ds.scene.name.clone(),
+        dynamic: is_dynamic_scene,
+        dim,
+        n: a.n,
+        h: ds.scene.h,
+        eps,
+        dt,
+        steps,
+        scheme: scheme.as_str(),
+        density: ds.density.clone(),
+        backend: a.backend.clone(),
+        pruning: a.pruning.as_str(),
+        accuracy: a.accuracy.as_str(),
+        qp_tol: qps.eps_abs,
+        weight,
+        metrics: metrics.clone(),
+        params: params_json,
+        settings: OuterSettings {
+            tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+            max_outer: cs.max_outer,
+            pruning: cs.pruning,
+            ..Default::default()
+        },
+    };
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!(
+        "{} {}: {} of {steps} steps ({}), E {:.10e} -> {:.10e}, K_end = {:.3e}, all admissible = {}, {} steps not converged (max outer), {:.1} s -> {}",
+        a.scene,
+        scheme.as_str(),
+        metrics.steps_taken,
+        metrics.status,
+        metrics.initial_energy,
+        metrics.final_energy,
+        metrics.final_kinetic,
+        metrics.all_admissible,
+        metrics.steps_max_outer,
+        metrics.wall_time_s,
+        out.display()
+    );
+    if !metrics.all_admissible || metrics.status != "completed" {
+        bail!(
+            "dynamic run violated a guarantee or stopped: all_admissible = {}, status = {}",
+            metrics.all_admissible,
+            metrics.status
+        );
+    }
+    Ok(())
+}
