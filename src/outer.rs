@@ -329,7 +329,7 @@ pub fn run(
         return Err(RunError::BadEps(eps));
     }
     if let Some(t) = settings.time_limit_s {
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             return Err(RunError::BadTimeLimit(t));
         }
     }
