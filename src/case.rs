@@ -360,6 +360,9 @@ pub struct CaseSettings {
     /// Inner (Newton-type) steps per T(ψ) at most (`None`: the default, 50); 1 gives one QP
     /// per outer step.
     pub max_inner: Option<usize>,
+    /// Wall-time limit of the run in seconds (`None`: none); a run that reaches it ends with
+    /// status `time_limit` and its last admissible iterate.
+    pub time_limit_s: Option<f64>,
 }
 
 /// A finished case.
@@ -447,6 +450,7 @@ pub fn execute_with(
     if let Some(k) = cs.max_inner {
         settings.inner.max_inner = k;
     }
+    settings.time_limit_s = cs.time_limit_s;
     let mut records = Vec::new();
     let res = run(
         &scene.mesh,

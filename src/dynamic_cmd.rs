@@ -104,6 +104,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         tol_j: a.tol_j,
         max_outer: a.max_outer,
         max_inner: Some(a.max_inner),
+        time_limit_s: None,
     };
     if a.max_inner == 0 {
         bail!("--max-inner must be >= 1, got 0");

@@ -67,6 +67,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         tol_j: None,
         max_outer: a.max_outer,
         max_inner: None,
+        time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);
     let mut inner = backend_from_name(&a.backend, &qp_settings)?;

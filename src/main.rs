@@ -112,6 +112,10 @@ pub(crate) struct RunArgs {
     /// Maximum outer iterations.
     #[arg(long, default_value_t = 2000)]
     max_outer: usize,
+    /// Wall-time limit in seconds: the run then ends with status time_limit and its last
+    /// admissible iterate (checked between inner steps; a QP under way is finished first).
+    #[arg(long)]
+    time_limit: Option<f64>,
     /// Backend tolerance (eps_abs = eps_rel); default: the preset's (default preset: 1e-9
     /// clarabel, 1e-8 uzawa, 1e-6 osqp).
     #[arg(long)]
@@ -299,6 +303,7 @@ fn run_cmd(a: RunArgs) -> Result<()> {
     };
     settings.inner.max_inner = a.max_inner;
     settings.inner.warm_start = !a.no_warm_start;
+    settings.time_limit_s = a.time_limit;
     if a.max_inner == 0 {
         bail!("--max-inner must be >= 1, got 0");
     }
@@ -310,6 +315,11 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             "--trust-delta0 must be finite and > 0, got {}",
             a.trust_delta0
         );
+    }
+    if let Some(t) = a.time_limit {
+        if t.is_nan() || t <= 0.0 {
+            bail!("--time-limit must be > 0 seconds, got {t}");
+        }
     }
     if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
         bail!("--tol-j must be > 0, got {}", settings.tol_j);
@@ -403,6 +413,17 @@ fn run_cmd(a: RunArgs) -> Result<()> {
         pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
         pvd.write(&out.join("frames.pvd"))?;
     }
+    // The state the run returns, its last admissible iterate, whatever the status (after an
+    // inadmissible or energy-increasing step the last frame is that step's iterate).
+    write_vtu(
+        &out.join("final.vtu"),
+        mesh.dim,
+        &res.x,
+        &mesh.edges,
+        vtk_triangles(mesh),
+        &mesh.tets,
+        &[],
+    )?;
     let near = near_pairs(mesh, &res.x, 1.01 * scene.eps, false);
     let pattern = contact_pattern(mesh, &res.x, &near, scene.eps);
     let names: Vec<[String; 2]> = pattern

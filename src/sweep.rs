@@ -180,6 +180,8 @@ pub struct Common {
     pub max_outer: Option<usize>,
     /// Inner steps per T(ψ) at most (default 50; 1 = one QP per outer step).
     pub max_inner: Option<usize>,
+    /// Wall-time limit per run in seconds (status `time_limit` when reached; static runs only).
+    pub time_limit_s: Option<f64>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -417,6 +419,23 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             .or(file.defaults.max_outer)
             .unwrap_or(2000);
         let max_inner = b.common.max_inner.or(file.defaults.max_inner);
+        let time_limit_s = b.common.time_limit_s.or(file.defaults.time_limit_s);
+        if let Some(t) = time_limit_s {
+            if t.is_nan() || t <= 0.0 {
+                bail!(
+                    "scene block {} ({}): time_limit_s = {t} must be > 0",
+                    bi + 1,
+                    b.name
+                );
+            }
+            if b.dynamic {
+                bail!(
+                    "scene block {} ({}): time_limit_s applies to static runs only (a dynamic run solves one problem per step)",
+                    bi + 1,
+                    b.name
+                );
+            }
+        }
         if max_outer == 0 || max_inner == Some(0) {
             bail!(
                 "scene block {} ({}): max_outer and max_inner must be ≥ 1",
@@ -553,6 +572,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                                 tol_j,
                                 max_outer,
                                 max_inner,
+                                time_limit_s,
                             };
                             let mut spec = RunSpec {
                                 key: String::new(),
@@ -567,7 +587,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                                 dynamic: dy.clone(),
                             };
                             spec.key = format!(
-                                "{}{}|{}|{}|{}|tolj={}|max={}{}",
+                                "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
                                 spec.group_key(),
                                 dy.as_ref().map_or(String::new(), |d| format!(
                                     "|dt={:?}|steps={}|{}",
@@ -581,7 +601,8 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                                 tol_j.map_or("preset".into(), |t| format!("{t:?}")),
                                 max_outer,
                                 // only when set, so that keys of sweeps without it stay as they were
-                                max_inner.map_or(String::new(), |k| format!("|inner={k}"))
+                                max_inner.map_or(String::new(), |k| format!("|inner={k}")),
+                                time_limit_s.map_or(String::new(), |t| format!("|limit={t:?}s"))
                             );
                             if !seen.insert(spec.key.clone()) {
                                 bail!("run {} appears twice in the sweep file", spec.key);
@@ -817,6 +838,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         tol_j: Some(r.tol_j),
         max_outer: spec.settings.max_outer.max(10_000),
         max_inner: None,
+        time_limit_s: None,
     };
     let o = case::execute(&scene, &cs, &mut |_, _| {})?;
     Ok(Reference {
@@ -1055,6 +1077,16 @@ mod tests {
         let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\nmax_inner = 1").unwrap();
         assert_eq!(runs[0].settings.max_inner, Some(1));
         assert!(runs[0].key.ends_with("|inner=1"), "{}", runs[0].key);
+        assert!(runs[0].settings.time_limit_s.is_none() && !runs[0].key.contains("limit="));
+        // so does time_limit_s; a bad one, or one on a dynamic block, is an error naming it
+        let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\ntime_limit_s = 2.5").unwrap();
+        assert_eq!(runs[0].settings.time_limit_s, Some(2.5));
+        assert!(runs[0].key.ends_with("|limit=2.5s"), "{}", runs[0].key);
+        let err = |s: &str| format!("{:#}", parse(s).expect_err("should fail"));
+        let m = err("[[scene]]\nname = \"ring\"\nn = [20]\ntime_limit_s = 0");
+        assert!(m.contains("time_limit_s = 0 must be > 0"), "{m}");
+        let m = err("[[scene]]\nname = \"drop\"\ndynamic = true\ntime_limit_s = 5");
+        assert!(m.contains("static runs only"), "{m}");
     }
 
     #[test]
