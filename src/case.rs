@@ -138,6 +138,7 @@ fn solids_params(
             ("upper_size", |p| &mut p.upper_size),
             ("overlap", |p| &mut p.overlap),
             ("gap", |p| &mut p.gap),
+            ("contrast", |p| &mut p.contrast),
         ],
         &[],
     )?;

@@ -63,6 +63,9 @@ pub struct SolidsParams {
     pub overlap: f64,
     /// Distance between the blocks in `x0` (> 0).
     pub gap: f64,
+    /// Stiffness contrast: the upper block's μ and λ are `contrast` times the lower block's
+    /// (> 0; the extremes experiment sweeps it from 1 to 1e8).
+    pub contrast: f64,
 }
 
 impl Default for SolidsParams {
@@ -76,6 +79,7 @@ impl Default for SolidsParams {
             upper_size: 0.7,
             overlap: 0.1,
             gap: 0.1,
+            contrast: 1.0,
         }
     }
 }
@@ -143,6 +147,7 @@ impl SolidsParams {
             ("upper_size", self.upper_size),
             ("overlap", self.overlap),
             ("gap", self.gap),
+            ("contrast", self.contrast),
         ] {
             if !(v > 0.0 && v.is_finite()) {
                 return bad(name, v.to_string(), "must be finite and > 0");
@@ -316,8 +321,21 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
             eps,
         });
     }
-    let energy = TotalEnergy {
-        terms: vec![Box::new(NeoHookean3d::new(tets, &x_ref, p.mu, p.lambda)?)],
+    // One term over both blocks when they are alike (the sums of the committed results), one
+    // per block otherwise.
+    let energy = if p.contrast == 1.0 {
+        TotalEnergy {
+            terms: vec![Box::new(NeoHookean3d::new(tets, &x_ref, p.mu, p.lambda)?)],
+        }
+    } else {
+        let (lower, upper) = tets.split_at(nt);
+        let (mu_u, lambda_u) = (p.contrast * p.mu, p.contrast * p.lambda);
+        TotalEnergy {
+            terms: vec![
+                Box::new(NeoHookean3d::new(lower.to_vec(), &x_ref, p.mu, p.lambda)?),
+                Box::new(NeoHookean3d::new(upper.to_vec(), &x_ref, mu_u, lambda_u)?),
+            ],
+        }
     };
     Ok(Scene {
         name: "solids".into(),
@@ -500,5 +518,43 @@ mod tests {
             ..Default::default()
         });
         assert!(e.contains("not admissible"), "{e}");
+        let e = msg(SolidsParams {
+            contrast: 0.0,
+            ..Default::default()
+        });
+        assert!(e.contains("invalid contrast = 0"), "{e}");
+    }
+
+    #[test]
+    fn solids_contrast_scales_the_upper_block_only() {
+        // E_c = E_lower + c · E_upper: affine in c, the same slope from any two contrasts; at
+        // c = 1 it is the one-term energy of the committed results.
+        let energy = |c: f64| {
+            build(&SolidsParams {
+                contrast: c,
+                ..Default::default()
+            })
+            .unwrap()
+        };
+        let one = energy(1.0);
+        // a deformed state: the relaxed x0 moved by a smooth field
+        let x: Vec<f64> = one
+            .x0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.01 * ((i as f64) * 0.37).sin())
+            .collect();
+        let e1 = one.energy.value(&x);
+        let (e7, e1e8) = (energy(7.0).energy.value(&x), energy(1e8).energy.value(&x));
+        let upper = (e7 - e1) / 6.0;
+        assert!(upper > 0.0, "{upper}");
+        let rel = ((e1e8 - e1) / (1e8 - 1.0) - upper).abs() / upper;
+        assert!(
+            rel < 1e-9,
+            "slopes {upper} and {} (rel {rel:e})",
+            (e1e8 - e1) / (1e8 - 1.0)
+        );
+        assert_eq!(energy(1.0).energy.terms.len(), 1);
+        assert_eq!(energy(7.0).energy.terms.len(), 2);
     }
 }
