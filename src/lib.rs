@@ -22,6 +22,7 @@ pub mod diagnostics;
 pub mod energy;
 pub mod geometry;
 pub mod mesh;
+pub mod meshio;
 pub mod outer;
 pub mod output;
 pub mod pairs;
