@@ -30,6 +30,7 @@ pub mod presets;
 pub mod rows;
 pub mod rows3d;
 pub mod scene;
+pub mod scenefile;
 pub mod subproblem;
 
 pub use contactlab_solvers as solvers;

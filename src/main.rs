@@ -4,7 +4,7 @@
 //! outer loop on a scene and writes a run directory (see README).
 
 use anyhow::{bail, Context, Result};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use contactlab::contact::near_pairs;
 use contactlab::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
@@ -55,7 +55,9 @@ enum Command {
 
 #[derive(clap::Args, Clone)]
 struct RunArgs {
-    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D).
+    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); or a scene file
+    /// `path/to/scene.toml` (SCENEFILES_NOTES.md), whose `[solver]` settings apply unless the
+    /// corresponding flag is given.
     #[arg(default_value = "balloons")]
     scene: String,
     /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
@@ -182,9 +184,92 @@ struct Summary {
     accuracy: &'static str,
 }
 
-fn run_cmd(a: RunArgs) -> Result<()> {
-    let n = a.n.unwrap_or_else(|| case::default_n(&a.scene));
+/// Loads a scene file and applies its `[solver]` settings to the flags not given explicitly.
+fn scene_from_file(
+    a: &mut RunArgs,
+    explicit: &dyn Fn(&str) -> bool,
+) -> Result<(contactlab::scene::Scene, serde_json::Value)> {
+    for (flag, given) in [
+        ("--n", a.n.is_some()),
+        ("--param", !a.params.is_empty()),
+        ("--c", a.c.is_some()),
+        ("--mu", a.mu.is_some()),
+        ("--eps", a.eps.is_some()),
+        ("--perturb", !a.perturb.is_empty()),
+        ("--heights", a.heights.is_some()),
+    ] {
+        if given {
+            bail!(
+                "{flag} is an option of the built-in scenes; a scene file sets its own values ({})",
+                a.scene
+            );
+        }
+    }
+    let f = contactlab::scenefile::load(std::path::Path::new(&a.scene))?;
+    let s = &f.solver;
+    if !explicit("backend") {
+        if let Some(v) = &s.backend {
+            a.backend = v.clone();
+        }
+    }
+    if !explicit("accuracy") {
+        if let Some(v) = &s.accuracy {
+            a.accuracy = parse_accuracy(v).map_err(anyhow::Error::msg)?;
+        }
+    }
+    if !explicit("pruning") {
+        if let Some(v) = s.pruning {
+            a.pruning = v;
+        }
+    }
+    if !explicit("max_outer") {
+        if let Some(v) = s.max_outer {
+            a.max_outer = v;
+        }
+    }
+    if !explicit("max_inner") {
+        if let Some(v) = s.max_inner {
+            a.max_inner = v;
+        }
+    }
+    if !explicit("tol_j") && s.tol_j.is_some() {
+        a.tol_j = s.tol_j;
+    }
+    if !explicit("qp_tol") && s.qp_tol.is_some() {
+        a.qp_tol = s.qp_tol;
+    }
+    if !explicit("lazy_start") {
+        if let Some(v) = s.lazy_start {
+            a.lazy_start = v;
+        }
+    }
+    if !explicit("trust_delta0") {
+        if let Some(v) = s.trust_delta0 {
+            a.trust_delta0 = v;
+        }
+    }
+    if !explicit("no_warm_start") {
+        if let Some(v) = s.warm_start {
+            a.no_warm_start = !v;
+        }
+    }
+    let params = serde_json::json!({
+        "scene_file": a.scene,
+        "bodies": f.body_names,
+        "solver": f.solver,
+    });
+    Ok((f.scene, params))
+}
+
+fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
+    let from_file = a.scene.ends_with(".toml");
+    let n = if from_file {
+        0
+    } else {
+        a.n.unwrap_or_else(|| case::default_n(&a.scene))
+    };
     let (scene, params) = match a.scene.as_str() {
+        _ if from_file => scene_from_file(&mut a, explicit)?,
         "balloons" => {
             let mut params = BalloonsParams {
                 n,
@@ -285,6 +370,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
     if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
         bail!("--tol-j must be > 0, got {}", settings.tol_j);
     }
+    // a scene file's n: its number of vertices
+    let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
         .out
         .clone()
@@ -625,16 +712,22 @@ impl DiagSummary {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let run_matches = matches.subcommand_matches("run");
+    let explicit = |id: &str| {
+        run_matches
+            .is_some_and(|m| m.value_source(id) == Some(clap::parser::ValueSource::CommandLine))
+    };
     let result = match cli.command {
-        Some(Command::Run(a)) => run_cmd(a),
+        Some(Command::Run(a)) => run_cmd(a, &explicit),
         Some(Command::Sweep(a)) => sweep::cmd_sweep(&a),
         Some(Command::Plot(a)) => plot_cmd::cmd_plot(&a),
         Some(Command::ExportQp(a)) => export_cmd::cmd_export(&a),
         Some(Command::Scaling(a)) => scaling_cmd::scaling_cmd(a),
         Some(Command::ScalingCase(a)) => scaling_cmd::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {
-            Some(Command::Run(a)) => run_cmd(a),
+            Some(Command::Run(a)) => run_cmd(a, &explicit),
             _ => unreachable!("`run` parses to Command::Run"),
         },
     };

@@ -98,7 +98,7 @@ pub fn read_mesh_file(path: &Path) -> Result<MeshData, MeshReadError> {
             return Err(MeshReadError::Parse {
                 path: name,
                 line,
-                message: "the file is not UTF-8 text (binary .msh files are not supported)".into(),
+                message: "the file is not UTF-8 text (binary mesh files are not supported)".into(),
             });
         }
     };
