@@ -280,3 +280,21 @@ fn scenefiles_builtin_twins_same_scene_and_run() {
         );
     }
 }
+
+#[test]
+fn scenefiles_every_experiment_scene_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            let f = scenefile::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            assert!(f.scene.mesh.nv() > 0);
+            n += 1;
+        }
+    }
+    assert_eq!(
+        n, 6,
+        "ring, rod, sheets, solids, solids_noself, two_strings"
+    );
+}
