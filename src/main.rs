@@ -1,7 +1,9 @@
 //! The `contactlab` command line.
 //!
 //! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
-//! outer loop on a scene and writes a run directory (see README).
+//! outer loop on a scene and writes a run directory (see README); `contactlab run path/to/scene.toml`
+//! runs a scene file (`contactlab::scenefile`, SCENEFILES_NOTES.md). Exit codes: 0 the run wrote
+//! its directory, 2 any error (bad input, inadmissible start, a violated guarantee).
 
 use anyhow::{bail, Context, Result};
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
