@@ -247,6 +247,7 @@ pub fn point_edge_near_in(
     skip_fixed: bool,
 ) -> Vec<NearPair> {
     let verts = mesh.contact_vertices();
+    let filter = mesh.filter();
     let per_vertex: Vec<Vec<NearPair>> = verts
         .par_iter()
         .map_init(Vec::new, |buf: &mut Vec<u32>, &v| {
@@ -266,6 +267,9 @@ pub fn point_edge_near_in(
                     continue;
                 }
                 if skip_fixed && mesh.fixed[v] && mesh.fixed[e[0]] && mesh.fixed[e[1]] {
+                    continue;
+                }
+                if filter.is_some_and(|f| !f.vertex_edge(v, a)) {
                     continue;
                 }
                 let d = point_edge_distance(&p, &Mesh::p2(x, e[0]), &Mesh::p2(x, e[1])).distance;
@@ -289,6 +293,7 @@ pub fn point_edge_near_in(
 /// With `skip_fixed`, pairs of edges whose four vertices are fixed are not tested.
 pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize, usize)> {
     let index = edge_index(mesh, x, &vec![0.0; mesh.edges.len()]);
+    let filter = mesh.filter();
     (0..mesh.edges.len())
         .into_par_iter()
         .map_init(Vec::new, |buf: &mut Vec<u32>, a| {
@@ -306,6 +311,9 @@ pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize
                     continue;
                 }
                 if skip_fixed && [ea[0], ea[1], eb[0], eb[1]].iter().all(|&v| mesh.fixed[v]) {
+                    continue;
+                }
+                if filter.is_some_and(|f| !f.edge_edge(a, b)) {
                     continue;
                 }
                 let d = edge_edge_distance_2d(
@@ -429,12 +437,16 @@ mod tests {
     /// Brute force: every pair with `d ≤ r_x + r_a`, by direct enumeration.
     fn brute(mesh: &Mesh, x: &[f64], rv: &[f64], re: &[f64], skip_fixed: bool) -> Vec<NearPair> {
         let mut out = Vec::new();
+        let filter = mesh.filter();
         for v in mesh.contact_vertices() {
             for (a, e) in mesh.edges.iter().enumerate() {
                 if v == e[0] || v == e[1] {
                     continue;
                 }
                 if skip_fixed && mesh.fixed[v] && mesh.fixed[e[0]] && mesh.fixed[e[1]] {
+                    continue;
+                }
+                if filter.is_some_and(|f| !f.vertex_edge(v, a)) {
                     continue;
                 }
                 let d =

@@ -21,7 +21,7 @@ use crate::broad_phase::{min_distance_near, point_edge_near};
 use crate::geometry::{point_edge_distance, point_triangle_distance, segment_segment_distance};
 use crate::mesh::Mesh;
 use crate::pairs::{point_edge_pairs, ClosestPair, MinDistance, PointEdgePair};
-use crate::rows3d::{min_distance_3d_bvh, near_pairs_3d, p3, Closest3};
+use crate::rows3d::{min_distance_3d_bvh_filtered, near_pairs_3d_filtered, p3, Closest3};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -214,7 +214,8 @@ pub fn all_fixed(mesh: &Mesh, pair: ContactPair) -> bool {
     }
 }
 
-/// Every pair of disjoint contact elements with a free vertex (the all-pairs mode): 2D
+/// Every pair of disjoint contact elements with a free vertex that the contact filter allows
+/// (the all-pairs mode): 2D
 /// point–edge pairs; 3D vertex–face and edge–edge pairs. O(N²).
 pub fn all_movable_pairs(mesh: &Mesh) -> Vec<ContactPair> {
     if mesh.dim == 2 {
@@ -226,16 +227,17 @@ pub fn all_movable_pairs(mesh: &Mesh) -> Vec<ContactPair> {
     }
     let mut out = Vec::new();
     let verts = mesh.contact_vertices();
+    let filter = mesh.filter();
     for &x in &verts {
         for (t, f) in mesh.faces.iter().enumerate() {
-            if !f.contains(&x) {
+            if !f.contains(&x) && filter.is_none_or(|fl| fl.vertex_face(x, t)) {
                 out.push(ContactPair::VertexTriangle { x, t });
             }
         }
     }
     for (a, ea) in mesh.edges.iter().enumerate() {
         for (b, eb) in mesh.edges.iter().enumerate().skip(a + 1) {
-            if !ea.iter().any(|v| eb.contains(v)) {
+            if !ea.iter().any(|v| eb.contains(v)) && filter.is_none_or(|fl| fl.edge_edge(a, b)) {
                 out.push(ContactPair::EdgeEdge { a, b });
             }
         }
@@ -254,7 +256,14 @@ pub fn near_pairs(mesh: &Mesh, x: &[f64], r: f64, skip_fixed: bool) -> Vec<Conta
             .map(|p| p.pair.into())
             .collect();
     }
-    let near = near_pairs_3d(x, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, r);
+    let near = near_pairs_3d_filtered(
+        x,
+        &mesh.contact_vertices(),
+        &mesh.edges,
+        &mesh.faces,
+        r,
+        mesh.filter(),
+    );
     let mut out: Vec<ContactPair> = near
         .vertex_triangle
         .iter()
@@ -281,8 +290,14 @@ pub fn min_distance(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDis
     if mesh.dim == 2 {
         return min_distance_near(mesh, x, r0, skip_fixed);
     }
-    let (distance, c) =
-        min_distance_3d_bvh(x, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, r0);
+    let (distance, c) = min_distance_3d_bvh_filtered(
+        x,
+        &mesh.contact_vertices(),
+        &mesh.edges,
+        &mesh.faces,
+        r0,
+        mesh.filter(),
+    );
     let pair = match c {
         Closest3::VertexTriangle { x, t } => ClosestPair::VertexTriangle {
             x,

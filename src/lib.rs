@@ -23,6 +23,7 @@ pub mod dynamics;
 pub mod energy;
 pub mod geometry;
 pub mod mesh;
+pub mod meshio;
 pub mod outer;
 pub mod output;
 pub mod pairs;
@@ -30,6 +31,7 @@ pub mod presets;
 pub mod rows;
 pub mod rows3d;
 pub mod scene;
+pub mod scenefile;
 pub mod subproblem;
 
 pub use contactlab_solvers as solvers;

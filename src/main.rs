@@ -1,10 +1,12 @@
 //! The `contactlab` command line.
 //!
 //! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
-//! outer loop on a scene and writes a run directory (see README).
+//! outer loop on a scene and writes a run directory (see README); `contactlab run path/to/scene.toml`
+//! runs a scene file (`contactlab::scenefile`, SCENEFILES_NOTES.md). Exit codes: 0 the run wrote
+//! its directory, 2 any error (bad input, inadmissible start, a violated guarantee).
 
 use anyhow::{bail, Context, Result};
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use contactlab::contact::near_pairs;
 use contactlab::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
@@ -58,7 +60,8 @@ enum Command {
 #[allow(missing_docs)]
 pub(crate) struct RunArgs {
     /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
-    /// also drop, collide (2D), drop3d (3D).
+    /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (README,
+    /// "Scene files"), whose `[solver]` settings apply unless the corresponding flag is given.
     #[arg(default_value = "balloons")]
     scene: String,
     /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
@@ -203,8 +206,89 @@ struct Summary {
     accuracy: &'static str,
 }
 
-fn run_cmd(a: RunArgs) -> Result<()> {
+/// Loads a scene file and applies its `[solver]` settings to the flags not given explicitly.
+fn scene_from_file(
+    a: &mut RunArgs,
+    explicit: &dyn Fn(&str) -> bool,
+) -> Result<(contactlab::scene::Scene, serde_json::Value)> {
+    for (flag, given) in [
+        ("--n", a.n.is_some()),
+        ("--param", !a.params.is_empty()),
+        ("--c", a.c.is_some()),
+        ("--mu", a.mu.is_some()),
+        ("--eps", a.eps.is_some()),
+        ("--perturb", !a.perturb.is_empty()),
+        ("--heights", a.heights.is_some()),
+    ] {
+        if given {
+            bail!(
+                "{flag} is an option of the built-in scenes; a scene file sets its own values ({})",
+                a.scene
+            );
+        }
+    }
+    let f = contactlab::scenefile::load(std::path::Path::new(&a.scene))?;
+    let s = &f.solver;
+    if !explicit("backend") {
+        if let Some(v) = &s.backend {
+            a.backend = v.clone();
+        }
+    }
+    if !explicit("accuracy") {
+        if let Some(v) = &s.accuracy {
+            a.accuracy = parse_accuracy(v).map_err(anyhow::Error::msg)?;
+        }
+    }
+    if !explicit("pruning") {
+        if let Some(v) = s.pruning {
+            a.pruning = v;
+        }
+    }
+    if !explicit("max_outer") {
+        if let Some(v) = s.max_outer {
+            a.max_outer = v;
+        }
+    }
+    if !explicit("max_inner") {
+        if let Some(v) = s.max_inner {
+            a.max_inner = v;
+        }
+    }
+    if !explicit("tol_j") && s.tol_j.is_some() {
+        a.tol_j = s.tol_j;
+    }
+    if !explicit("qp_tol") && s.qp_tol.is_some() {
+        a.qp_tol = s.qp_tol;
+    }
+    if !explicit("lazy_start") {
+        if let Some(v) = s.lazy_start {
+            a.lazy_start = v;
+        }
+    }
+    if !explicit("trust_delta0") {
+        if let Some(v) = s.trust_delta0 {
+            a.trust_delta0 = v;
+        }
+    }
+    if !explicit("no_warm_start") {
+        if let Some(v) = s.warm_start {
+            a.no_warm_start = !v;
+        }
+    }
+    let params = serde_json::json!({
+        "scene_file": a.scene,
+        "bodies": f.body_names,
+        "solver": f.solver,
+    });
+    Ok((f.scene, params))
+}
+
+fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
+    let from_file = a.scene.ends_with(".toml");
     if a.dynamic {
+        if from_file {
+            bail!("--dynamic with a scene file is not supported yet: run a built-in scene with --dynamic, or the file statically");
+        }
         return dynamic_cmd::run_dynamic(&a);
     }
     if a.dt.is_some() || a.steps.is_some() || a.scheme.is_some() {
@@ -216,8 +300,13 @@ fn run_cmd(a: RunArgs) -> Result<()> {
             a.scene
         );
     }
-    let n = a.n.unwrap_or_else(|| case::default_n(&a.scene));
+    let n = if from_file {
+        0
+    } else {
+        a.n.unwrap_or_else(|| case::default_n(&a.scene))
+    };
     let (scene, params) = match a.scene.as_str() {
+        _ if from_file => scene_from_file(&mut a, explicit)?,
         "balloons" => {
             let mut params = BalloonsParams {
                 n,
@@ -324,6 +413,8 @@ fn run_cmd(a: RunArgs) -> Result<()> {
     if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
         bail!("--tol-j must be > 0, got {}", settings.tol_j);
     }
+    // a scene file's n: its number of vertices
+    let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
         .out
         .clone()
@@ -675,16 +766,22 @@ impl DiagSummary {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let run_matches = matches.subcommand_matches("run");
+    let explicit = |id: &str| {
+        run_matches
+            .is_some_and(|m| m.value_source(id) == Some(clap::parser::ValueSource::CommandLine))
+    };
     let result = match cli.command {
-        Some(Command::Run(a)) => run_cmd(a),
+        Some(Command::Run(a)) => run_cmd(a, &explicit),
         Some(Command::Sweep(a)) => sweep::cmd_sweep(&a),
         Some(Command::Plot(a)) => plot_cmd::cmd_plot(&a),
         Some(Command::ExportQp(a)) => export_cmd::cmd_export(&a),
         Some(Command::Scaling(a)) => scaling_cmd::scaling_cmd(a),
         Some(Command::ScalingCase(a)) => scaling_cmd::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {
-            Some(Command::Run(a)) => run_cmd(a),
+            Some(Command::Run(a)) => run_cmd(a, &explicit),
             _ => unreachable!("`run` parses to Command::Run"),
         },
     };

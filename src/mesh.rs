@@ -80,6 +80,9 @@ pub enum MeshError {
         /// The value.
         value: f64,
     },
+    /// The contact filter was built for another mesh (vertex, element or body counts differ).
+    #[error("the contact filter was built for another mesh (rebuild it after the last change)")]
+    StaleFilter,
     /// An edge of zero reference length or a triangle of zero reference area.
     #[error("{element} {index} is degenerate ({measure} = {value})")]
     Degenerate {
@@ -119,6 +122,117 @@ pub struct Mesh {
     pub tets: Vec<[usize; 4]>,
     /// Bodies.
     pub bodies: Vec<Body>,
+    /// Which bodies may touch which (SPEC §2, "Only what the scene requires"). `None`: every
+    /// body may touch every body and itself (the paper's setting, and the default). Pairs the
+    /// filter excludes are never searched, never given rows and never checked.
+    pub contact_filter: Option<ContactFilter>,
+}
+
+/// The declared set of body pairs that may touch: a symmetric `nb × nb` mask (the diagonal:
+/// self-contact), plus the body of every contact element, so that a pair of elements can be
+/// tested without the mesh.
+///
+/// A vertex may belong to several bodies (a membrane glued to its support); a pair of a vertex
+/// `x` and an element of body `B` is kept when SOME body holding `x` may touch `B`
+/// (conservative: a glued vertex keeps the pairs of each of its bodies).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactFilter {
+    nb: usize,
+    allowed: Vec<bool>,
+    /// CSR: bodies of vertex `v` are `vb_list[vb_start[v]..vb_start[v + 1]]`.
+    vb_start: Vec<u32>,
+    vb_list: Vec<u32>,
+    edge_body: Vec<u32>,
+    face_body: Vec<u32>,
+}
+
+impl ContactFilter {
+    /// The filter of `mesh` (its bodies, `edge_body`, `face_body` must be final) from
+    /// `allowed(b1, b2)`, asked for `b1 ≤ b2` only (the mask is symmetric).
+    pub fn new(mesh: &Mesh, allowed: impl Fn(usize, usize) -> bool) -> ContactFilter {
+        let nb = mesh.bodies.len();
+        let mut mask = vec![false; nb * nb];
+        for i in 0..nb {
+            for j in i..nb {
+                let a = allowed(i, j);
+                mask[i * nb + j] = a;
+                mask[j * nb + i] = a;
+            }
+        }
+        let nv = mesh.nv();
+        let mut count = vec![0u32; nv + 1];
+        for b in &mesh.bodies {
+            for &v in &b.vertices {
+                if v < nv {
+                    count[v + 1] += 1;
+                }
+            }
+        }
+        for v in 0..nv {
+            count[v + 1] += count[v];
+        }
+        let mut fill = count.clone();
+        let mut list = vec![0u32; count[nv] as usize];
+        for (bi, b) in mesh.bodies.iter().enumerate() {
+            for &v in &b.vertices {
+                if v < nv {
+                    list[fill[v] as usize] = bi as u32;
+                    fill[v] += 1;
+                }
+            }
+        }
+        ContactFilter {
+            nb,
+            allowed: mask,
+            vb_start: count,
+            vb_list: list,
+            edge_body: mesh.edge_body.iter().map(|&b| b as u32).collect(),
+            face_body: mesh.face_body.iter().map(|&b| b as u32).collect(),
+        }
+    }
+
+    /// Whether bodies `b1` and `b2` may touch (`b1 == b2`: self-contact).
+    #[inline]
+    pub fn bodies(&self, b1: usize, b2: usize) -> bool {
+        self.allowed[b1 * self.nb + b2]
+    }
+
+    /// Whether every body may touch every body and itself (the filter excludes nothing).
+    pub fn is_everything(&self) -> bool {
+        self.allowed.iter().all(|&a| a)
+    }
+
+    #[inline]
+    fn vertex_body(&self, x: usize, b: u32) -> bool {
+        let (s, e) = (self.vb_start[x] as usize, self.vb_start[x + 1] as usize);
+        self.vb_list[s..e]
+            .iter()
+            .any(|&bx| self.allowed[bx as usize * self.nb + b as usize])
+    }
+
+    /// Vertex `x` with contact edge `a`.
+    #[inline]
+    pub fn vertex_edge(&self, x: usize, a: usize) -> bool {
+        self.vertex_body(x, self.edge_body[a])
+    }
+
+    /// Vertex `x` with contact face `t` (3D).
+    #[inline]
+    pub fn vertex_face(&self, x: usize, t: usize) -> bool {
+        self.vertex_body(x, self.face_body[t])
+    }
+
+    /// Contact edges `a` and `b`.
+    #[inline]
+    pub fn edge_edge(&self, a: usize, b: usize) -> bool {
+        self.bodies(self.edge_body[a] as usize, self.edge_body[b] as usize)
+    }
+
+    /// Contact edge `a` with contact face `t` (an edge through a face, 3D).
+    #[inline]
+    pub fn edge_face(&self, a: usize, t: usize) -> bool {
+        self.bodies(self.edge_body[a] as usize, self.face_body[t] as usize)
+    }
 }
 
 impl Mesh {
@@ -141,6 +255,13 @@ impl Mesh {
         } else {
             nalgebra::Vector3::new(x[2 * v], x[2 * v + 1], 0.0)
         }
+    }
+
+    /// The contact filter, or `None` when every pair may touch. Pair producers call this once
+    /// and skip the per-pair test when it is `None`, so the default leaves results unchanged.
+    #[inline]
+    pub fn filter(&self) -> Option<&ContactFilter> {
+        self.contact_filter.as_ref()
     }
 
     /// Contact vertices: every endpoint of a contact edge or vertex of a contact face, sorted,
@@ -172,6 +293,15 @@ impl Mesh {
             });
         }
         let nv = self.nv();
+        if let Some(f) = self.filter() {
+            if f.vb_start.len() != nv + 1
+                || f.edge_body.len() != self.edges.len()
+                || f.face_body.len() != self.faces.len()
+                || f.nb != self.bodies.len()
+            {
+                return Err(MeshError::StaleFilter);
+            }
+        }
         for (v, c) in self.x_ref.chunks(self.dim).enumerate() {
             for &value in c {
                 if !value.is_finite() {

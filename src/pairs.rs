@@ -18,15 +18,20 @@ pub struct PointEdgePair {
     pub a: usize,
 }
 
-/// All `point_edge` pairs of the mesh, split into those with at least one free vertex (they
+/// All `point_edge` pairs of the mesh that the contact filter ([`Mesh::contact_filter`])
+/// allows, split into those with at least one free vertex (they
 /// get rows) and those whose vertices are all fixed (checked once).
 pub fn point_edge_pairs(mesh: &Mesh) -> (Vec<PointEdgePair>, Vec<PointEdgePair>) {
     let verts = mesh.contact_vertices();
+    let filter = mesh.filter();
     let mut movable = Vec::new();
     let mut fixed = Vec::new();
     for (a, e) in mesh.edges.iter().enumerate() {
         for &x in &verts {
             if x == e[0] || x == e[1] {
+                continue;
+            }
+            if filter.is_some_and(|f| !f.vertex_edge(x, a)) {
                 continue;
             }
             let pair = PointEdgePair { x, a };
@@ -153,9 +158,13 @@ pub fn min_distance(mesh: &Mesh, x: &[f64], pairs: &[PointEdgePair]) -> MinDista
         }
     }
     // Crossings: only a crossing can make two disjoint edges closer than their endpoint pairs.
+    let filter = mesh.filter();
     for (a, ea) in mesh.edges.iter().enumerate() {
         for (b, eb) in mesh.edges.iter().enumerate().skip(a + 1) {
             if ea[0] == eb[0] || ea[0] == eb[1] || ea[1] == eb[0] || ea[1] == eb[1] {
+                continue;
+            }
+            if filter.is_some_and(|f| !f.edge_edge(a, b)) {
                 continue;
             }
             let d = edge_edge_distance_2d(

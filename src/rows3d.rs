@@ -26,6 +26,7 @@
 //! assembly and the outer loop in 3D are not wired to it yet (README, "Known gaps").
 
 use crate::geometry::{point_triangle_distance, segment_segment_distance};
+use crate::mesh::ContactFilter;
 use nalgebra::Vector3;
 
 /// One row `n · (φ(plus) − φ(minus)) ≥ ε`.
@@ -174,11 +175,23 @@ pub fn min_distance_3d(
     edges: &[[usize; 2]],
     triangles: &[[usize; 3]],
 ) -> (f64, Closest3) {
+    min_distance_3d_filtered(x, vertices, edges, triangles, None)
+}
+
+/// [`min_distance_3d`] over the pairs a contact filter allows (`None`: all pairs; `edges` and
+/// `triangles` must then be the mesh's contact edges and faces the filter was built for).
+pub fn min_distance_3d_filtered(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    filter: Option<&ContactFilter>,
+) -> (f64, Closest3) {
     let mut best = (f64::INFINITY, Closest3::None);
     for (ti, t) in triangles.iter().enumerate() {
         let (t0, t1, t2) = (p3(x, t[0]), p3(x, t[1]), p3(x, t[2]));
         for &v in vertices {
-            if t.contains(&v) {
+            if t.contains(&v) || filter.is_some_and(|f| !f.vertex_face(v, ti)) {
                 continue;
             }
             let d = point_triangle_distance(&p3(x, v), &t0, &t1, &t2).distance;
@@ -187,7 +200,7 @@ pub fn min_distance_3d(
             }
         }
         for (ai, e) in edges.iter().enumerate() {
-            if e.iter().any(|v| t.contains(v)) {
+            if e.iter().any(|v| t.contains(v)) || filter.is_some_and(|f| !f.edge_face(ai, ti)) {
                 continue;
             }
             if segment_meets_triangle(&p3(x, e[0]), &p3(x, e[1]), &t0, &t1, &t2) {
@@ -197,7 +210,7 @@ pub fn min_distance_3d(
     }
     for (ai, a) in edges.iter().enumerate() {
         for (bi, b) in edges.iter().enumerate().skip(ai + 1) {
-            if a.iter().any(|v| b.contains(v)) {
+            if a.iter().any(|v| b.contains(v)) || filter.is_some_and(|f| !f.edge_edge(ai, bi)) {
                 continue;
             }
             let d =
@@ -348,6 +361,19 @@ pub fn near_pairs_3d(
     triangles: &[[usize; 3]],
     r: f64,
 ) -> NearPairs3 {
+    near_pairs_3d_filtered(x, vertices, edges, triangles, r, None)
+}
+
+/// [`near_pairs_3d`] over the pairs a contact filter allows (`None`: all pairs). An excluded
+/// pair is dropped before its distance is computed.
+pub fn near_pairs_3d_filtered(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r: f64,
+    filter: Option<&ContactFilter>,
+) -> NearPairs3 {
     use crate::bvh::Bvh;
     let mut out = NearPairs3::default();
     let mut hits = Vec::new();
@@ -359,7 +385,7 @@ pub fn near_pairs_3d(
         tb.query(&lo, &hi, &mut hits);
         for &ti in &hits {
             let t = triangles[ti as usize];
-            if t.contains(&v) {
+            if t.contains(&v) || filter.is_some_and(|f| !f.vertex_face(v, ti as usize)) {
                 continue;
             }
             let d = point_triangle_distance(&p3(x, v), &p3(x, t[0]), &p3(x, t[1]), &p3(x, t[2]))
@@ -378,7 +404,10 @@ pub fn near_pairs_3d(
         for &bi in &hits {
             let bi = bi as usize;
             let b = edges[bi];
-            if bi <= ai || a.iter().any(|v| b.contains(v)) {
+            if bi <= ai
+                || a.iter().any(|v| b.contains(v))
+                || filter.is_some_and(|f| !f.edge_edge(ai, bi))
+            {
                 continue;
             }
             let d =
@@ -404,6 +433,18 @@ pub fn min_distance_3d_bvh(
     triangles: &[[usize; 3]],
     r0: f64,
 ) -> (f64, Closest3) {
+    min_distance_3d_bvh_filtered(x, vertices, edges, triangles, r0, None)
+}
+
+/// [`min_distance_3d_bvh`] over the pairs a contact filter allows (`None`: all pairs).
+pub fn min_distance_3d_bvh_filtered(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r0: f64,
+    filter: Option<&ContactFilter>,
+) -> (f64, Closest3) {
     use crate::bvh::Bvh;
     let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
     let tb = Bvh::<3>::build(&tbox);
@@ -414,7 +455,9 @@ pub fn min_distance_3d_bvh(
         tb.query(&lo, &hi, &mut hits);
         for &ti in &hits {
             let t = triangles[ti as usize];
-            if e.iter().any(|v| t.contains(v)) {
+            if e.iter().any(|v| t.contains(v))
+                || filter.is_some_and(|f| !f.edge_face(ai, ti as usize))
+            {
                 continue;
             }
             if segment_meets_triangle(
@@ -440,7 +483,7 @@ pub fn min_distance_3d_bvh(
     let diam = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
     let mut r = r0.max(f64::MIN_POSITIVE);
     loop {
-        let near = near_pairs_3d(x, vertices, edges, triangles, r);
+        let near = near_pairs_3d_filtered(x, vertices, edges, triangles, r, filter);
         let mut best = (f64::INFINITY, Closest3::None);
         for &(v, t, d) in &near.vertex_triangle {
             if d < best.0 {

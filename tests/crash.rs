@@ -45,7 +45,11 @@ fn a_sigkilled_run_leaves_complete_files() {
 
     // history.csv: complete rows, each with the header's number of fields
     let text = std::fs::read_to_string(&hist).unwrap();
-    assert!(text.ends_with('\n'), "torn last row: {:?}", text.lines().last());
+    assert!(
+        text.ends_with('\n'),
+        "torn last row: {:?}",
+        text.lines().last()
+    );
     let mut r = csv::Reader::from_path(&hist).unwrap();
     let width = r.headers().unwrap().len();
     let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();

@@ -430,6 +430,7 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
         triangles,
         tets: vec![],
         bodies,
+        contact_filter: None,
     };
     mesh.validate()?;
     let (distance, pair) =

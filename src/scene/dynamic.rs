@@ -599,6 +599,7 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
         face_body: (0..nt).map(|t| usize::from(t >= nto)).collect(),
         triangles,
         tets: vec![],
+        contact_filter: None,
         bodies: vec![
             Body {
                 name: "obstacle".into(),

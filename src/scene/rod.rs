@@ -339,6 +339,7 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
             edges: (0..nv - 1).collect(),
             ..Default::default()
         }],
+        contact_filter: None,
     };
     mesh.validate()?;
     let (distance, pair) =

@@ -305,6 +305,7 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
                 2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
             ),
         ],
+        contact_filter: None,
     };
     mesh.validate()?;
     let (distance, pair) =

@@ -310,6 +310,7 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
             body("lower", 0, 3f64.sqrt() / m as f64),
             body("upper", 1, 3f64.sqrt() * s / m as f64),
         ],
+        contact_filter: None,
     };
     mesh.validate()?;
     let (distance, pair) =
