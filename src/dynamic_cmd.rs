@@ -299,12 +299,17 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         metrics.wall_time_s,
         out.display()
     );
-    if !metrics.all_admissible || metrics.status != "completed" {
+    if !metrics.all_admissible {
         bail!(
-            "dynamic run violated a guarantee or stopped: all_admissible = {}, status = {}",
-            metrics.all_admissible,
+            "dynamic run violated a guarantee: all_admissible = false, status = {}",
             metrics.status
         );
+    }
+    if metrics.status != "completed" {
+        return Err(crate::RunFinished {
+            status: metrics.status.to_string(),
+        }
+        .into());
     }
     Ok(())
 }

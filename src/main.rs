@@ -2,8 +2,9 @@
 //!
 //! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
 //! outer loop on a scene and writes a run directory (see README); `contactlab run path/to/scene.toml`
-//! runs a scene file (`contactlab::scenefile`, SCENEFILES_NOTES.md). Exit codes: 0 the run wrote
-//! its directory, 2 any error (bad input, inadmissible start, a violated guarantee).
+//! runs a scene file (`contactlab::scenefile`, README "Scene files"). Exit codes: 0 a run
+//! converged (or a command succeeded), 1 a run finished with a failure status (its directory
+//! written), 2 an error (bad input, inadmissible start, a violated guarantee), 101 a panic.
 
 use anyhow::{bail, Context, Result};
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -630,6 +631,12 @@ fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     if !monotone || !admissible {
         bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
     }
+    if res.status != RunStatus::Converged {
+        return Err(RunFinished {
+            status: res.status.as_str().into(),
+        }
+        .into());
+    }
     Ok(())
 }
 
@@ -765,6 +772,25 @@ impl DiagSummary {
     }
 }
 
+/// A run that finished and wrote its outputs, but with a failure status (exit code 1).
+#[derive(Debug)]
+pub(crate) struct RunFinished {
+    /// The status (`max_outer_iterations`, `subproblem_failed`, …).
+    pub status: String,
+}
+
+impl std::fmt::Display for RunFinished {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the run finished with status {} (its outputs are written)",
+            self.status
+        )
+    }
+}
+
+impl std::error::Error for RunFinished {}
+
 fn main() {
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
@@ -785,7 +811,14 @@ fn main() {
             _ => unreachable!("`run` parses to Command::Run"),
         },
     };
+    // Exit codes: 0 a run converged (a dynamic run completed) or a command succeeded; 1 a run
+    // finished with a failure status, its outputs written; 2 an error (bad input, a failed
+    // write, a violated guarantee); 101 a panic.
     if let Err(e) = result {
+        if let Some(f) = e.downcast_ref::<RunFinished>() {
+            eprintln!("contactlab: {f}");
+            std::process::exit(1);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(2);
     }

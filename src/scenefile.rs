@@ -1,7 +1,7 @@
 //! Scene files: a scene described in TOML (bodies with their meshes, materials, loads, fixed
 //! vertices and gas; ε; which bodies may touch; solver settings), run by
 //! `contactlab run path/to/scene.toml` without recompiling. The full schema, with an example,
-//! is in `SCENEFILES_NOTES.md`; in short:
+//! is in the README ("Scene files"); in short:
 //!
 //! ```toml
 //! name = "two-strings"        # optional, default: the file's stem

@@ -838,7 +838,9 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         tol_j: Some(r.tol_j),
         max_outer: spec.settings.max_outer.max(10_000),
         max_inner: None,
-        time_limit_s: None,
+        // the block's limit: a reference that reaches it is not converged, and the rows of its
+        // group then get no error columns
+        time_limit_s: spec.settings.time_limit_s,
     };
     let o = case::execute(&scene, &cs, &mut |_, _| {})?;
     Ok(Reference {

@@ -192,3 +192,36 @@ fn a_time_limit_that_is_not_positive_is_an_error() {
         assert!(err.to_string().contains("time limit"), "{err}");
     }
 }
+
+#[test]
+fn the_binary_exits_1_on_a_failure_status_with_its_outputs_written() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("failure_exit");
+    for (args, status) in [
+        (&["--max-outer", "1"][..], "max_outer_iterations"),
+        (&["--time-limit", "1e-9"][..], "time_limit"),
+    ] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+            .args(["run", "balloons", "--n", "20", "--quiet", "--out"])
+            .arg(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(status), "{err}");
+        let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        assert!(
+            summary.contains(&format!("\"status\": \"{status}\"")),
+            "{summary}"
+        );
+        assert!(dir.join("final.vtu").exists() && dir.join("history.csv").exists());
+    }
+    // bad input stays exit 2
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(["run", "balloons", "--time-limit", "-1", "--quiet", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
