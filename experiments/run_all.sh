@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # The sweeps of issue 4 and their plots, in order. Each sweep resumes (--resume), so a rerun
 # after an interruption runs only the missing rows. Timing sweeps use --jobs 1.
-# Usage: bash experiments/run_all.sh [NAME ...]   (default: all five)
+# Usage: bash experiments/run_all.sh [NAME ...]   (default: all six)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
 [ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling)
+[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes)
 for name in "${names[@]}"; do
   case $name in
-    lemma56|iterations) jobs=2 ;;
+    lemma56|iterations|extremes) jobs=2 ;;
     *) jobs=1 ;;
   esac
   out=results/$name.csv
@@ -51,6 +51,16 @@ for name in "${names[@]}"; do
       "$bin" plot results/tradeoff.csv --x wall_time_s --y position_error_h1 --group backend \
         --pareto --no-fit --where scene=balloons --where n=80 \
         --title "balloons n=80: H1 position error against time" --out results/tradeoff_h1.svg ;;
+    extremes)
+      # the eps/h regime (h fixed within each block, so eps stands for eps/h); params= keeps
+      # the other regimes of the same scene out
+      for s in "balloons 40" "rod 2"; do
+        set -- $s
+        "$bin" plot results/extremes.csv --x eps --y wall_time_s,energy_error --group backend \
+          --where scene=$1 --where n=$2 --where params= \
+          --title "$1 n=$2: time and energy error against eps (h fixed), converged rows" \
+          --out results/extremes_eps_$1.svg
+      done ;;
     scaling)
       # balloons only: the 3D rows (capped at 50 outer steps, n a mesh level) are a table in
       # results/README.md, not a series to fit
