@@ -683,6 +683,24 @@ fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
     Ok(keys)
 }
 
+/// The row of a run's outcome: its values, or an `error` or `panic` row with the message.
+fn outcome_row(
+    out: std::thread::Result<Result<BTreeMap<&'static str, String>>>,
+) -> BTreeMap<&'static str, String> {
+    let (status, error) = match out {
+        Ok(Ok(m)) => return m,
+        Ok(Err(e)) => ("error", format!("{e:#}")),
+        Err(p) => (
+            "panic",
+            p.downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "panic".into()),
+        ),
+    };
+    BTreeMap::from([("status", status.to_string()), ("error", error)])
+}
+
 /// Runs one spec into its row (never panics: a panic becomes a `panic` row).
 fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static str, String> {
     let t = Instant::now();
@@ -711,26 +729,7 @@ fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static s
         m.insert("max_violation", f((scene.eps - worst).max(0.0)));
         Ok(m)
     }));
-    let mut m = match out {
-        Ok(Ok(m)) => m,
-        Ok(Err(e)) => {
-            let mut m = BTreeMap::new();
-            m.insert("status", "error".to_string());
-            m.insert("error", format!("{e:#}"));
-            m
-        }
-        Err(p) => {
-            let msg = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "panic".into());
-            let mut m = BTreeMap::new();
-            m.insert("status", "panic".to_string());
-            m.insert("error", msg);
-            m
-        }
-    };
+    let mut m = outcome_row(out);
     m.entry("h").or_insert_with(|| f(spec.h));
     m.entry("eps").or_insert_with(|| f(spec.eps));
     m.entry("wall_time_s")
@@ -799,26 +798,7 @@ fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
         m.insert("wall_time_s", f(mt.wall_time_s));
         Ok(m)
     }));
-    let mut m = match out {
-        Ok(Ok(m)) => m,
-        Ok(Err(e)) => {
-            let mut m = BTreeMap::new();
-            m.insert("status", "error".to_string());
-            m.insert("error", format!("{e:#}"));
-            m
-        }
-        Err(p) => {
-            let msg = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "panic".into());
-            let mut m = BTreeMap::new();
-            m.insert("status", "panic".to_string());
-            m.insert("error", msg);
-            m
-        }
-    };
+    let mut m = outcome_row(out);
     m.insert("dt", f(d.dt));
     m.insert("steps", d.steps.to_string());
     m.insert("scheme", d.scheme.as_str().to_string());
