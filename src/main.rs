@@ -525,10 +525,17 @@ fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let state = match scene.name.as_str() {
         "ring" => ring::classify_state(mesh, &res.x, scene.eps),
         "balloons" => {
+            // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
+            let balloon = |b: usize| {
+                mesh.bodies[b]
+                    .name
+                    .strip_prefix("balloon")
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .filter(|&k| k < 4)
+            };
             let balloon_pairs: Vec<(usize, usize)> = pattern
                 .iter()
-                .copied()
-                .filter(|&(i, j)| i < 4 && j < 4)
+                .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
                 .collect();
             classify_state(&balloon_pairs)
         }
