@@ -211,7 +211,7 @@ struct Summary {
 fn scene_from_file(
     a: &mut RunArgs,
     explicit: &dyn Fn(&str) -> bool,
-) -> Result<(contactlab::scene::Scene, serde_json::Value)> {
+) -> Result<(contactlab::scenefile::SceneFile, serde_json::Value)> {
     for (flag, given) in [
         ("--n", a.n.is_some()),
         ("--param", !a.params.is_empty()),
@@ -280,15 +280,17 @@ fn scene_from_file(
         "scene_file": a.scene,
         "bodies": f.body_names,
         "solver": f.solver,
+        "dynamics": f.dynamics,
     });
-    Ok((f.scene, params))
+    Ok((f, params))
 }
 
 fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let from_file = a.scene.ends_with(".toml");
     if a.dynamic {
         if from_file {
-            bail!("--dynamic with a scene file is not supported yet: run a built-in scene with --dynamic, or the file statically");
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            return dynamic_cmd::run_dynamic_file(&a, f, params);
         }
         return dynamic_cmd::run_dynamic(&a);
     }
@@ -307,7 +309,10 @@ fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         a.n.unwrap_or_else(|| case::default_n(&a.scene))
     };
     let (scene, params) = match a.scene.as_str() {
-        _ if from_file => scene_from_file(&mut a, explicit)?,
+        _ if from_file => {
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            (f.scene, params)
+        }
         "balloons" => {
             let mut params = BalloonsParams {
                 n,
