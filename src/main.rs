@@ -137,10 +137,11 @@ pub(crate) struct RunArgs {
     /// same outer loop (DYNAMICS_NOTES.md).
     #[arg(long)]
     dynamic: bool,
-    /// Time step (--dynamic; default: the dynamic scene's).
+    /// Time step (--dynamic; default: the dynamic scene's, or the scene file's [dynamics]).
     #[arg(long)]
     dt: Option<f64>,
-    /// Number of time steps (--dynamic; default: the dynamic scene's).
+    /// Number of time steps (--dynamic; default: the dynamic scene's, or the scene file's
+    /// [dynamics]).
     #[arg(long)]
     steps: Option<usize>,
     /// Time-stepping scheme: euler (implicit Euler, default) or newmark (average

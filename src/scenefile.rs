@@ -8,6 +8,12 @@
 //! dim = 2                     # 2 or 3
 //! eps = 0.01                  # ε > 0
 //! gravity = [0.0, -1.0]       # optional acceleration; loads every body with a density
+//! weld = [["lower", 0, "upper", 0]]  # optional: vertex 0 of lower and vertex 0 of upper are one
+//!
+//! [dynamics]                  # optional defaults of `--dynamic` (--dt/--steps/--scheme override)
+//! dt = 0.01
+//! steps = 100
+//! scheme = "euler"            # euler | newmark
 //!
 //! [contact]                   # optional; default: every body may touch every body and itself
 //! pairs = [["upper", "lower"]]   # if present: the only pairs of distinct bodies that may touch
@@ -28,7 +34,9 @@
 //! translate = [0.0, 0.0]      # optional, applied to mesh and initial: x ↦ scale·x + translate
 //! scale = 1.0
 //! material = { model = "string", mu = 1.0 }   # string | stvk-membrane | neo-hookean
-//! density = 1.0               # optional (per unit length / area / volume of the reference)
+//! density = 1.0               # per unit length / area / volume of the reference: gravity,
+//!                             # and the masses of --dynamic (required there if a vertex is free)
+//! velocity = [0.0, -1.0]      # optional initial velocity for --dynamic (uniform on the body)
 //! fixed = { vertices = [0, 10], all = false, box = { min = [-1, -1], max = [1, -0.9] } }
 //! gas = { c = 50.0 }          # optional: −C ln V (closed or chord-closed curve, closed surface)
 //! pressure = { p = 1.0 }      # optional (2D curves): p·A
@@ -50,7 +58,10 @@
 //! term is invariant under translation, so J decreases without bound along g) must be able to
 //! touch, under the contact filter, a body that holds a fixed vertex, directly or through
 //! other such bodies (a necessary condition only: whether that body is actually below it is
-//! not checked).
+//! not checked). **Welds** (`weld`): see [`SceneFile`] and the README ("Welded vertices"):
+//! unknown bodies, indices out of range, a body welded to itself, vertices apart by more than
+//! [`WELD_TOL`] × the longer longest edge, and chains merging two vertices of one body are
+//! errors.
 
 use crate::contact::min_distance;
 use crate::energy::{
