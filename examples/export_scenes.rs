@@ -1,36 +1,46 @@
-//! Writes the built-in scenes ring, rod, sheets and solids (default parameters) as scene files
-//! in `experiments/scenes/`: one TOML each, the reference meshes (`.obj` for curves and
-//! surfaces, Gmsh 2.2 `.msh` for tetrahedra) and, where the initial configuration differs from
-//! the reference, an initial-position file. `tests/scenefiles.rs` checks that each file scene
-//! and its built-in twin give the same energy and the same run.
+//! Writes the built-in scenes ring, rod, sheets, solids, balloons, balloons3d and the dynamic
+//! scene drop (default parameters) as scene files in `experiments/scenes/`: one TOML each, the
+//! reference meshes (`.obj` for curves, surfaces and 2D solids, Gmsh 2.2 `.msh` for
+//! tetrahedra) and, where the initial configuration differs from the reference, an
+//! initial-position file. The balloons' membranes are welded to the box (`weld`).
+//! `tests/scenefiles.rs` checks that each file scene and its built-in twin give the same
+//! energy and the same run (drop: the same first time steps).
 //!
 //! `cargo run --release --example export_scenes [DIR]`
 
 use contactlab::mesh::{BodyKind, Mesh};
 use contactlab::meshio::{write_msh22, write_obj};
-use contactlab::scene::{ring, rod, sheets, solids, Scene};
+use contactlab::scene::{balloons, balloons3d, dynamic, ring, rod, sheets, solids, Scene};
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The body's vertices (contiguous in the built-in numbering), as a local flat array of `x`.
-fn local(mesh: &Mesh, b: usize, x: &[f64]) -> (usize, Vec<f64>) {
-    let vs = &mesh.bodies[b].vertices;
-    let off = vs[0];
-    assert!(vs.iter().enumerate().all(|(k, &v)| v == off + k));
+/// The body's vertices, in the order of its vertex list, as a local flat array of `x`.
+fn local(mesh: &Mesh, b: usize, x: &[f64]) -> Vec<f64> {
     let d = mesh.dim;
-    (off, x[d * off..d * (off + vs.len())].to_vec())
+    mesh.bodies[b]
+        .vertices
+        .iter()
+        .flat_map(|&v| x[d * v..d * v + d].iter().copied())
+        .collect()
 }
 
 /// Writes body `b`'s mesh (and initial positions if they differ); returns the TOML lines
-/// `mesh = …`, `initial = …`, `fixed = …`.
+/// `mesh = …`, `initial = …`, `fixed = …`. Local vertex `k` is the body's `vertices[k]`.
 fn body_files(s: &Scene, b: usize, dir: &Path, stem: &str) -> String {
     let m = &s.mesh;
     let body = &m.bodies[b];
-    let (off, xr) = local(m, b, &m.x_ref);
-    let (_, x0) = local(m, b, &s.x0);
-    let sh2 = |e: &[usize; 2]| [e[0] - off, e[1] - off];
-    let sh3 = |t: &[usize; 3]| t.map(|v| v - off);
-    let sh4 = |t: &[usize; 4]| t.map(|v| v - off);
+    let xr = local(m, b, &m.x_ref);
+    let x0 = local(m, b, &s.x0);
+    let loc: HashMap<usize, usize> = body
+        .vertices
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| (v, k))
+        .collect();
+    let sh2 = |e: &[usize; 2]| e.map(|v| loc[&v]);
+    let sh3 = |t: &[usize; 3]| t.map(|v| loc[&v]);
+    let sh4 = |t: &[usize; 4]| t.map(|v| loc[&v]);
     let write = |name: &str, x: &[f64]| {
         let text = match body.kind {
             BodyKind::Curve => {
@@ -45,6 +55,14 @@ fn body_files(s: &Scene, b: usize, dir: &Path, stem: &str) -> String {
                     .collect();
                 write_obj(m.dim, x, &[], &t)
             }
+            BodyKind::Solid if m.dim == 2 => {
+                let t: Vec<_> = body
+                    .triangles
+                    .iter()
+                    .map(|&t| sh3(&m.triangles[t]))
+                    .collect();
+                write_obj(m.dim, x, &[], &t)
+            }
             BodyKind::Solid => {
                 let t: Vec<_> = body.tets.iter().map(|&t| sh4(&m.tets[t])).collect();
                 write_msh22(m.dim, x, &[], &[], &t)
@@ -52,7 +70,7 @@ fn body_files(s: &Scene, b: usize, dir: &Path, stem: &str) -> String {
         };
         std::fs::write(dir.join(name), text).unwrap();
     };
-    let ext = if body.kind == BodyKind::Solid {
+    let ext = if body.kind == BodyKind::Solid && m.dim == 3 {
         "msh"
     } else {
         "obj"
@@ -66,11 +84,38 @@ fn body_files(s: &Scene, b: usize, dir: &Path, stem: &str) -> String {
         writeln!(out, "initial = {init:?}").unwrap();
     }
     let fixed: Vec<usize> = (0..body.vertices.len())
-        .filter(|&k| m.fixed[off + k])
+        .filter(|&k| m.fixed[body.vertices[k]])
         .collect();
-    if !fixed.is_empty() {
+    if fixed.len() == body.vertices.len() {
+        out.push_str("fixed = { all = true }\n");
+    } else if !fixed.is_empty() {
         writeln!(out, "fixed = {{ vertices = {fixed:?} }}").unwrap();
     }
+    out
+}
+
+/// `weld = [...]` joining each vertex to its first occurrence, bodies written in `order`.
+fn welds(m: &Mesh, order: &[usize]) -> String {
+    let mut out = String::from("weld = [\n");
+    for (i, &b) in order.iter().enumerate() {
+        for (k, v) in m.bodies[b].vertices.iter().enumerate() {
+            if let Some((a, ka)) = order[..i].iter().find_map(|&a| {
+                m.bodies[a]
+                    .vertices
+                    .iter()
+                    .position(|w| w == v)
+                    .map(move |ka| (a, ka))
+            }) {
+                writeln!(
+                    out,
+                    "  [{:?}, {ka}, {:?}, {k}],",
+                    m.bodies[a].name, m.bodies[b].name
+                )
+                .unwrap();
+            }
+        }
+    }
+    out.push_str("]\n");
     out
 }
 
@@ -149,5 +194,91 @@ fn main() {
         .unwrap();
     }
     std::fs::write(dir.join("solids.toml"), t).unwrap();
-    println!("wrote ring, rod, sheets, solids to {}", dir.display());
+
+    // balloons: the box first, so that the body-by-body numbering of the file (a welded
+    // vertex numbered where it first occurs) is the built-in numbering (box vertices first);
+    // each membrane's two ends are welded to the box's support ends
+    let p = balloons::BalloonsParams::default();
+    let s = balloons::build(&p).unwrap();
+    let order = [4, 0, 1, 2, 3];
+    let mut t = header("balloons", &s);
+    t.push_str(&welds(&s.mesh, &order));
+    for &b in &order {
+        let body = &s.mesh.bodies[b];
+        write!(
+            t,
+            "\n[[body]]\nname = {:?}\nkind = \"curve\"\n{}",
+            body.name,
+            body_files(&s, b, dir, "balloons")
+        )
+        .unwrap();
+        if b < 4 {
+            writeln!(
+                t,
+                "material = {{ model = \"string\", mu = {:?} }}\ngas = {{ c = {:?} }}",
+                p.mu, p.c
+            )
+            .unwrap();
+        }
+    }
+    std::fs::write(dir.join("balloons.toml"), t).unwrap();
+
+    // balloons3d: no shared vertices (each balloon is held by its fixed pad triangle)
+    let p = balloons3d::Balloons3dParams::default();
+    let s = balloons3d::build(&p).unwrap();
+    let mut t = header("balloons3d", &s);
+    for b in 0..3 {
+        let body = &s.mesh.bodies[b];
+        write!(
+            t,
+            "\n[[body]]\nname = {:?}\nkind = \"surface\"\n{}",
+            body.name,
+            body_files(&s, b, dir, "balloons3d")
+        )
+        .unwrap();
+        if b < 2 {
+            writeln!(
+                t,
+                "material = {{ model = \"stvk-membrane\", mu = {:?}, lambda = {:?} }}\ngas = {{ c = {:?} }}",
+                p.mu, p.lambda, p.c
+            )
+            .unwrap();
+        }
+    }
+    std::fs::write(dir.join("balloons3d.toml"), t).unwrap();
+
+    // drop (dynamic): the ring (a 2D solid) and the fixed floor, gravity, [dynamics]
+    let p = dynamic::DropParams::default();
+    let ds = dynamic::drop(&p).unwrap();
+    let s = &ds.scene;
+    let mut t = header("drop", s).replace(
+        "Same energy and run as\n# `contactlab run drop`",
+        "Same energy and time steps\n# as `contactlab run drop --dynamic`",
+    );
+    writeln!(
+        t,
+        "gravity = [0.0, {:?}]\n\n[dynamics]\ndt = {:?}\nsteps = {}\nscheme = \"euler\"",
+        -p.g, ds.dt, ds.steps
+    )
+    .unwrap();
+    write!(
+        t,
+        "\n[[body]]\nname = \"ring\"\nkind = \"solid\"\n{}material = {{ model = \"neo-hookean\", mu = {:?}, lambda = {:?} }}\ndensity = {:?}\n",
+        body_files(s, 0, dir, "drop"),
+        p.ring.mu,
+        p.ring.lambda,
+        p.density
+    )
+    .unwrap();
+    write!(
+        t,
+        "\n[[body]]\nname = \"floor\"\nkind = \"curve\"\n{}",
+        body_files(s, 1, dir, "drop")
+    )
+    .unwrap();
+    std::fs::write(dir.join("drop.toml"), t).unwrap();
+    println!(
+        "wrote ring, rod, sheets, solids, balloons, balloons3d, drop to {}",
+        dir.display()
+    );
 }

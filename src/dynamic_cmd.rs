@@ -1,5 +1,6 @@
 //! `contactlab run SCENE --dynamic --dt DT --steps K [--scheme euler|newmark]`: time stepping
-//! (§6) and its run directory:
+//! (§6) and its run directory. SCENE is a built-in scene or a scene file (masses from its
+//! bodies' `density`, initial velocities from `velocity`, defaults from `[dynamics]`):
 //!
 //! - `history.csv`: one row per step ([`StepRecord`]: step, time, kinetic, elastic,
 //!   potential, total, momentum_x/y/z, min_distance, admissible, active_contacts,
@@ -22,6 +23,7 @@ use contactlab::output::svg::write_svg;
 use contactlab::output::timeseries::{timeseries_svg, Line};
 use contactlab::output::vtk::{write_vtu, PvdSeries};
 use contactlab::output::write_atomic;
+use contactlab::scene::dynamic::DynamicScene;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -52,7 +54,8 @@ struct DynamicSummary {
     pruning: &'static str,
     accuracy: &'static str,
     qp_tol: f64,
-    /// `m g` of the free bodies for the scenes with gravity `g` (drop, drop3d).
+    /// `m g` of the free bodies for the scenes with gravity `g` (drop, drop3d, scene files
+    /// with `gravity`).
     weight: Option<f64>,
     metrics: DynamicMetrics,
     params: serde_json::Value,
@@ -64,7 +67,7 @@ pub fn parse_scheme(s: &str) -> Result<Scheme> {
     Scheme::from_name(s).with_context(|| format!("--scheme {s:?}: expected one of euler, newmark"))
 }
 
-/// `contactlab run … --dynamic`.
+/// `contactlab run … --dynamic` on a built-in scene.
 pub fn run_dynamic(a: &RunArgs) -> Result<()> {
     if !a.perturb.is_empty() || a.heights.is_some() {
         bail!("--perturb and --heights set the balloons' static start; they are not available with --dynamic");
@@ -83,7 +86,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         }
         params.insert("c".into(), c);
     }
-    let (mut ds, params_json) = case::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
+    let (ds, params_json) = case::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
     let is_dynamic_scene = DYNAMIC_SCENES.contains(&a.scene.as_str());
     let dt = a.dt.unwrap_or(ds.dt);
     let steps = a.steps.unwrap_or(ds.steps);
@@ -93,7 +96,73 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
             a.scene
         );
     }
-    let dyn_settings = DynamicSettings { dt, steps, scheme };
+    let g = params.get("g").copied().unwrap_or(9.81);
+    let weight_g = matches!(a.scene.as_str(), "drop" | "drop3d").then_some(g);
+    let label = a.scene.clone();
+    run_prepared(
+        a,
+        ds,
+        params_json,
+        DynamicSettings { dt, steps, scheme },
+        is_dynamic_scene,
+        weight_g,
+        &label,
+    )
+}
+
+/// `contactlab run FILE.toml --dynamic`: the scene file's masses (`density`), initial
+/// velocities (`velocity`) and `[dynamics]` defaults; `--dt`, `--steps`, `--scheme` override
+/// them, and Δt and the number of steps must come from one or the other.
+pub fn run_dynamic_file(
+    a: &RunArgs,
+    file: contactlab::scenefile::SceneFile,
+    params_json: serde_json::Value,
+) -> Result<()> {
+    let spec = file.dynamics.clone();
+    let path = file.path.display().to_string();
+    let scheme = parse_scheme(
+        a.scheme
+            .as_deref()
+            .or(spec.scheme.as_deref())
+            .unwrap_or("euler"),
+    )?;
+    let dt = a.dt.or(spec.dt).with_context(|| {
+        format!("{path}: --dynamic needs a time step: give --dt or `dt` in the file's [dynamics]")
+    })?;
+    let steps = a.steps.or(spec.steps).with_context(|| {
+        format!(
+            "{path}: --dynamic needs a number of steps: give --steps or `steps` in the file's [dynamics]"
+        )
+    })?;
+    let weight_g = file
+        .gravity
+        .as_ref()
+        .map(|g| g.iter().map(|c| c * c).sum::<f64>().sqrt());
+    let ds = file.into_dynamic()?;
+    let label = ds.scene.name.clone();
+    run_prepared(
+        a,
+        ds,
+        params_json,
+        DynamicSettings { dt, steps, scheme },
+        true,
+        weight_g,
+        &label,
+    )
+}
+
+/// The stepping and the run directory, shared by the built-in scenes and the scene files.
+/// `weight_g`: `|g|` when the contact-force plot gets the free bodies' weight `m g`.
+fn run_prepared(
+    a: &RunArgs,
+    mut ds: DynamicScene,
+    params_json: serde_json::Value,
+    dyn_settings: DynamicSettings,
+    is_dynamic_scene: bool,
+    weight_g: Option<f64>,
+    label: &str,
+) -> Result<()> {
+    let DynamicSettings { dt, steps, scheme } = dyn_settings.clone();
     dyn_settings
         .validate()
         .map_err(|e| anyhow::anyhow!("--dt/--steps: {e}"))?;
@@ -117,7 +186,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
     let out = a
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-dynamic-{}", a.scene, scheme.as_str())));
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{label}-dynamic-{}", scheme.as_str())));
     let frames = out.join("frames");
     std::fs::create_dir_all(&frames)
         .with_context(|| format!("cannot create run directory {}", frames.display()))?;
@@ -197,15 +266,14 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
     }
     hist.flush()?;
     contacts.flush()?;
-    let g = params.get("g").copied().unwrap_or(9.81);
-    let weight = matches!(a.scene.as_str(), "drop" | "drop3d").then(|| metrics.free_mass * g);
+    let weight = weight_g.map(|g| metrics.free_mass * g);
     // pictures
     let series = |f: fn(&StepRecord) -> f64| -> Vec<(f64, f64)> {
         records.iter().map(|r| (r.time, f(r))).collect()
     };
     let title = format!(
         "{} {} dt={} steps={} backend={}",
-        a.scene,
+        label,
         scheme.as_str(),
         dt,
         res.steps,
@@ -287,7 +355,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
     )?;
     println!(
         "{} {}: {} of {steps} steps ({}), E {:.10e} -> {:.10e}, K_end = {:.3e}, all admissible = {}, {} steps not converged (max outer), {:.1} s -> {}",
-        a.scene,
+        label,
         scheme.as_str(),
         metrics.steps_taken,
         metrics.status,

@@ -137,10 +137,11 @@ pub(crate) struct RunArgs {
     /// same outer loop (DYNAMICS_NOTES.md).
     #[arg(long)]
     dynamic: bool,
-    /// Time step (--dynamic; default: the dynamic scene's).
+    /// Time step (--dynamic; default: the dynamic scene's, or the scene file's [dynamics]).
     #[arg(long)]
     dt: Option<f64>,
-    /// Number of time steps (--dynamic; default: the dynamic scene's).
+    /// Number of time steps (--dynamic; default: the dynamic scene's, or the scene file's
+    /// [dynamics]).
     #[arg(long)]
     steps: Option<usize>,
     /// Time-stepping scheme: euler (implicit Euler, default) or newmark (average
@@ -211,7 +212,7 @@ struct Summary {
 fn scene_from_file(
     a: &mut RunArgs,
     explicit: &dyn Fn(&str) -> bool,
-) -> Result<(contactlab::scene::Scene, serde_json::Value)> {
+) -> Result<(contactlab::scenefile::SceneFile, serde_json::Value)> {
     for (flag, given) in [
         ("--n", a.n.is_some()),
         ("--param", !a.params.is_empty()),
@@ -280,15 +281,17 @@ fn scene_from_file(
         "scene_file": a.scene,
         "bodies": f.body_names,
         "solver": f.solver,
+        "dynamics": f.dynamics,
     });
-    Ok((f.scene, params))
+    Ok((f, params))
 }
 
 fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let from_file = a.scene.ends_with(".toml");
     if a.dynamic {
         if from_file {
-            bail!("--dynamic with a scene file is not supported yet: run a built-in scene with --dynamic, or the file statically");
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            return dynamic_cmd::run_dynamic_file(&a, f, params);
         }
         return dynamic_cmd::run_dynamic(&a);
     }
@@ -307,7 +310,10 @@ fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         a.n.unwrap_or_else(|| case::default_n(&a.scene))
     };
     let (scene, params) = match a.scene.as_str() {
-        _ if from_file => scene_from_file(&mut a, explicit)?,
+        _ if from_file => {
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            (f.scene, params)
+        }
         "balloons" => {
             let mut params = BalloonsParams {
                 n,
@@ -525,10 +531,17 @@ fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let state = match scene.name.as_str() {
         "ring" => ring::classify_state(mesh, &res.x, scene.eps),
         "balloons" => {
+            // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
+            let balloon = |b: usize| {
+                mesh.bodies[b]
+                    .name
+                    .strip_prefix("balloon")
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .filter(|&k| k < 4)
+            };
             let balloon_pairs: Vec<(usize, usize)> = pattern
                 .iter()
-                .copied()
-                .filter(|&(i, j)| i < 4 && j < 4)
+                .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
                 .collect();
             classify_state(&balloon_pairs)
         }

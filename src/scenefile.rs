@@ -8,6 +8,12 @@
 //! dim = 2                     # 2 or 3
 //! eps = 0.01                  # ε > 0
 //! gravity = [0.0, -1.0]       # optional acceleration; loads every body with a density
+//! weld = [["lower", 0, "upper", 0]]  # optional: vertex 0 of lower and vertex 0 of upper are one
+//!
+//! [dynamics]                  # optional defaults of `--dynamic` (--dt/--steps/--scheme override)
+//! dt = 0.01
+//! steps = 100
+//! scheme = "euler"            # euler | newmark
 //!
 //! [contact]                   # optional; default: every body may touch every body and itself
 //! pairs = [["upper", "lower"]]   # if present: the only pairs of distinct bodies that may touch
@@ -28,7 +34,9 @@
 //! translate = [0.0, 0.0]      # optional, applied to mesh and initial: x ↦ scale·x + translate
 //! scale = 1.0
 //! material = { model = "string", mu = 1.0 }   # string | stvk-membrane | neo-hookean
-//! density = 1.0               # optional (per unit length / area / volume of the reference)
+//! density = 1.0               # per unit length / area / volume of the reference: gravity,
+//!                             # and the masses of --dynamic (required there if a vertex is free)
+//! velocity = [0.0, -1.0]      # optional initial velocity for --dynamic (uniform on the body)
 //! fixed = { vertices = [0, 10], all = false, box = { min = [-1, -1], max = [1, -0.9] } }
 //! gas = { c = 50.0 }          # optional: −C ln V (closed or chord-closed curve, closed surface)
 //! pressure = { p = 1.0 }      # optional (2D curves): p·A
@@ -50,7 +58,10 @@
 //! term is invariant under translation, so J decreases without bound along g) must be able to
 //! touch, under the contact filter, a body that holds a fixed vertex, directly or through
 //! other such bodies (a necessary condition only: whether that body is actually below it is
-//! not checked).
+//! not checked). **Welds** (`weld`): see [`SceneFile`] and the README ("Welded vertices"):
+//! unknown bodies, indices out of range, a body welded to itself, vertices apart by more than
+//! [`WELD_TOL`] × the longer longest edge, and chains merging two vertices of one body are
+//! errors.
 
 use crate::contact::min_distance;
 use crate::energy::{
@@ -173,17 +184,87 @@ pub struct SolverSpec {
     pub warm_start: Option<bool>,
 }
 
+/// `[dynamics]`: defaults of `contactlab run FILE --dynamic` (each optional; `--dt`,
+/// `--steps`, `--scheme` override).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DynamicsSpec {
+    /// Time step Δt (> 0).
+    pub dt: Option<f64>,
+    /// Number of steps (≥ 1).
+    pub steps: Option<usize>,
+    /// `euler` or `newmark`.
+    pub scheme: Option<String>,
+}
+
 /// A loaded scene file: the scene and the file's solver settings.
 pub struct SceneFile {
     /// The scene (mesh, energy, ε, h, φ_0).
     pub scene: Scene,
     /// `[solver]`.
     pub solver: SolverSpec,
+    /// `[dynamics]`.
+    pub dynamics: DynamicsSpec,
     /// The scene file.
     pub path: PathBuf,
     /// Body names, in mesh order.
     pub body_names: Vec<String>,
+    /// Each body's `density`, if given.
+    pub densities: Vec<Option<f64>>,
+    /// Initial velocity (flat, like positions) from the bodies' `velocity` keys; 0 elsewhere
+    /// and at fixed vertices.
+    pub v0: Vec<f64>,
+    /// `gravity`, if non-zero.
+    pub gravity: Option<Vec<f64>>,
+    /// Line of each `[[body]]` table.
+    body_lines: Vec<usize>,
 }
+
+impl SceneFile {
+    /// The scene for `contactlab run FILE --dynamic`: lumped masses from each body's
+    /// `density`, the initial velocity of the bodies' `velocity` keys, Δt and steps from
+    /// `[dynamics]` (0 when absent: [`crate::dynamics::DynamicSettings::validate`] refuses
+    /// them unless the command line gives them). A body with a free vertex needs a
+    /// `density > 0` (a massless free vertex has no dynamics); a body whose vertices are all
+    /// fixed may omit it (taken as 0).
+    pub fn into_dynamic(self) -> Result<crate::scene::dynamic::DynamicScene, SceneFileError> {
+        let mesh = &self.scene.mesh;
+        let mut density = Vec::with_capacity(mesh.bodies.len());
+        for (bi, (b, rho)) in mesh.bodies.iter().zip(&self.densities).enumerate() {
+            let free = b.vertices.iter().any(|&v| !mesh.fixed[v]);
+            match rho {
+                Some(r) if *r > 0.0 || !free => density.push(*r),
+                None if !free => density.push(0.0),
+                _ => {
+                    return Err(SceneFileError::Invalid {
+                        path: self.path.display().to_string(),
+                        line: self.body_lines[bi],
+                        key: format!("body[{bi}].density"),
+                        value: rho.map_or("(missing)".into(), |r| r.to_string()),
+                        reason: format!(
+                            "body {:?} has free vertices: a dynamic run (--dynamic) needs its \
+                             density > 0 (lumped masses); only a body whose vertices are all \
+                             fixed may have none",
+                            b.name
+                        ),
+                    })
+                }
+            }
+        }
+        Ok(crate::scene::dynamic::DynamicScene {
+            density,
+            v0: self.v0,
+            dt: self.dynamics.dt.unwrap_or(0.0),
+            steps: self.dynamics.steps.unwrap_or(0),
+            scene: self.scene,
+        })
+    }
+}
+
+/// Largest distance, relative to the longer of the two bodies' longest reference edges, at
+/// which two welded vertices still count as the same point (in the reference and in the
+/// initial configuration).
+pub const WELD_TOL: f64 = 1e-9;
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -194,9 +275,15 @@ struct FileSpec {
     gravity: Option<Spanned<Vec<f64>>>,
     contact: Option<Spanned<ContactSpec>>,
     solver: Option<Spanned<SolverSpec>>,
+    weld: Option<Vec<Spanned<WeldSpec>>>,
+    dynamics: Option<Spanned<DynamicsSpec>>,
     #[serde(default)]
     body: Vec<Spanned<BodySpec>>,
 }
+
+/// `weld = [["a", i, "b", j], …]`: vertex `i` of body `a` and vertex `j` of body `b` are one
+/// vertex.
+type WeldSpec = (String, i64, String, i64);
 
 #[derive(serde::Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -221,6 +308,7 @@ struct BodySpec {
     scale: Option<f64>,
     material: Option<MaterialSpec>,
     density: Option<f64>,
+    velocity: Option<Vec<f64>>,
     fixed: Option<FixedSpec>,
     gas: Option<GasSpec>,
     pressure: Option<PressureSpec>,
@@ -379,6 +467,37 @@ impl Ctx<'_> {
                 s
             }
         };
+        let dynamics = match spec.dynamics {
+            None => DynamicsSpec::default(),
+            Some(d) => {
+                let line = self.line(d.span().start);
+                let d = d.into_inner();
+                if let Some(dt) = d.dt {
+                    if !(dt > 0.0 && dt.is_finite()) {
+                        return Err(self.invalid(
+                            line,
+                            "dynamics.dt",
+                            dt,
+                            "must be finite and > 0",
+                        ));
+                    }
+                }
+                if d.steps == Some(0) {
+                    return Err(self.invalid(line, "dynamics.steps", 0, "must be ≥ 1"));
+                }
+                if let Some(sc) = &d.scheme {
+                    if crate::dynamics::Scheme::from_name(sc).is_none() {
+                        return Err(self.invalid(
+                            line,
+                            "dynamics.scheme",
+                            format!("{sc:?}"),
+                            "expected one of euler, newmark",
+                        ));
+                    }
+                }
+                d
+            }
+        };
         if spec.body.is_empty() {
             return Err(self.invalid(1, "body", "[]", "the scene needs at least one [[body]]"));
         }
@@ -430,7 +549,8 @@ impl Ctx<'_> {
             eps_line,
             gravity,
             spec.contact,
-            solver,
+            spec.weld.unwrap_or_default(),
+            (solver, dynamics),
             loaded,
             specs,
             path,
@@ -911,7 +1031,8 @@ impl Ctx<'_> {
         eps_line: usize,
         gravity: Option<(Vec<f64>, usize)>,
         contact: Option<Spanned<ContactSpec>>,
-        solver: SolverSpec,
+        welds: Vec<Spanned<WeldSpec>>,
+        (solver, dynamics): (SolverSpec, DynamicsSpec),
         loaded: Vec<Loaded>,
         specs: Vec<BodySpec>,
         path: &Path,
@@ -921,27 +1042,37 @@ impl Ctx<'_> {
             dim,
             ..Default::default()
         };
-        let mut x0 = Vec::new();
-        let mut offsets = Vec::with_capacity(nb);
+        let (global, welded) = self.resolve_welds(&welds, &loaded)?;
+        let nv = global.iter().flatten().copied().max().map_or(0, |m| m + 1);
+        // positions of a welded vertex: those of its first occurrence (body order); fixed if
+        // any of its occurrences is
+        let mut x0 = vec![0.0; dim * nv];
+        mesh.x_ref = vec![0.0; dim * nv];
+        mesh.fixed = vec![false; nv];
+        let mut seen = vec![false; nv];
+        for (l, map) in loaded.iter().zip(&global) {
+            for (k, &v) in map.iter().enumerate() {
+                if !seen[v] {
+                    seen[v] = true;
+                    mesh.x_ref[dim * v..dim * v + dim].copy_from_slice(&l.x_ref[k][..dim]);
+                    x0[dim * v..dim * v + dim].copy_from_slice(&l.x0[k][..dim]);
+                }
+                mesh.fixed[v] |= l.fixed[k];
+            }
+        }
         // contact edges / faces of each body, as global indices
         let mut body_elements: Vec<Vec<[usize; 4]>> = Vec::with_capacity(nb);
         for (bi, l) in loaded.iter().enumerate() {
-            let off = mesh.nv();
-            offsets.push(off);
-            for (p, q) in l.x_ref.iter().zip(&l.x0) {
-                mesh.x_ref.extend_from_slice(&p[..dim]);
-                x0.extend_from_slice(&q[..dim]);
-            }
-            mesh.fixed.extend_from_slice(&l.fixed);
+            let map = &global[bi];
             let els: Vec<[usize; 4]> = l
                 .elems
                 .iter()
-                .map(|e| std::array::from_fn(|k| if k < l.arity { e[k] + off } else { 0 }))
+                .map(|e| std::array::from_fn(|k| if k < l.arity { map[e[k]] } else { 0 }))
                 .collect();
             let mut body = Body {
                 name: l.name.clone(),
                 kind: l.kind,
-                vertices: (off..off + l.x_ref.len()).collect(),
+                vertices: map.clone(),
                 ..Default::default()
             };
             let push_edges = |mesh: &mut Mesh, body: &mut Body, edges: Vec<[usize; 2]>| {
@@ -1016,7 +1147,19 @@ impl Ctx<'_> {
             mesh.bodies.push(body);
             body_elements.push(els);
         }
-        let h = mesh.bodies.iter().map(|b| b.h).fold(0.0, f64::max);
+        // h: the mesh size of the bodies that deform (a body whose vertices are all fixed is
+        // an obstacle, its edges may be long); of all bodies if every vertex is fixed
+        let deforms = |b: &Body| b.vertices.iter().any(|&v| !mesh.fixed[v]);
+        let h = if mesh.bodies.iter().any(deforms) {
+            mesh.bodies
+                .iter()
+                .filter(|b| deforms(b))
+                .map(|b| b.h)
+                .fold(0.0, f64::max)
+        } else {
+            mesh.bodies.iter().map(|b| b.h).fold(0.0, f64::max)
+        };
+        let body_all_fixed: Vec<bool> = mesh.bodies.iter().map(|b| !deforms(b)).collect();
 
         // energy terms, body by body: material, then gas, then pressure; gravity last
         let mut energy = TotalEnergy::default();
@@ -1026,7 +1169,7 @@ impl Ctx<'_> {
             let key = &l.key;
             let line = l.line;
             let els = &body_elements[bi];
-            let all_fixed = l.fixed.iter().all(|&f| f);
+            let all_fixed = body_all_fixed[bi];
             match &s.material {
                 None if all_fixed => {}
                 None => {
@@ -1232,13 +1375,18 @@ impl Ctx<'_> {
                 .iter()
                 .map(|s| s.density.unwrap_or(0.0) > 0.0)
                 .collect();
-            let mut supported: Vec<bool> =
-                loaded.iter().map(|l| l.fixed.iter().any(|&f| f)).collect();
+            let mut supported: Vec<bool> = mesh
+                .bodies
+                .iter()
+                .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
+                .collect();
             loop {
                 let mut changed = false;
                 for i in 0..nb {
                     if !supported[i]
-                        && (0..nb).any(|j| j != i && supported[j] && allowed[i * nb + j])
+                        && (0..nb).any(|j| {
+                            j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j])
+                        })
                     {
                         supported[i] = true;
                         changed = true;
@@ -1257,7 +1405,7 @@ impl Ctx<'_> {
                         format!(
                             "the problem is unbounded: body {:?} has no fixed vertex, carries a \
                              gravity load, and may touch no body that holds a fixed vertex \
-                             (directly or through other bodies; see [contact]), so translating \
+                             (directly or through other bodies; see [contact] and weld), so translating \
                              it along gravity lowers J without bound",
                             names[i]
                         ),
@@ -1282,7 +1430,7 @@ impl Ctx<'_> {
                          {} are at distance {:.6e} < eps, so that body's rest shape is not \
                          admissible (refine nothing: lower eps below {:.6e}, or exclude the \
                          body's self-contact in [contact])",
-                        describe(&mesh, &offsets, &names, &md.pair),
+                        describe(&mesh, &names, &md.pair),
                         md.distance,
                         md.distance
                     ),
@@ -1294,7 +1442,7 @@ impl Ctx<'_> {
         if md0.distance < eps {
             return Err(SceneFileError::InadmissibleStart {
                 path: self.path.clone(),
-                pair: describe(&mesh, &offsets, &names, &md0.pair),
+                pair: describe(&mesh, &names, &md0.pair),
                 distance: md0.distance,
                 eps,
             });
@@ -1307,6 +1455,50 @@ impl Ctx<'_> {
                 "the initial energy is not finite",
             ));
         }
+        // initial velocities: uniform per body; a free vertex shared by bodies must get the
+        // same velocity from each (no `velocity`: zero)
+        let mut v0 = vec![0.0; dim * mesh.nv()];
+        let mut v_from: Vec<Option<usize>> = vec![None; mesh.nv()];
+        for (bi, (l, s)) in loaded.iter().zip(&specs).enumerate() {
+            let vel = match &s.velocity {
+                None => vec![0.0; dim],
+                Some(v) => {
+                    if v.len() != dim || v.iter().any(|c| !c.is_finite()) {
+                        return Err(self.invalid(
+                            l.line,
+                            format!("{}.velocity", l.key),
+                            fmt_list(v),
+                            format!("must be {dim} finite numbers"),
+                        ));
+                    }
+                    v.clone()
+                }
+            };
+            for (k, &v) in mesh.bodies[bi].vertices.iter().enumerate() {
+                if mesh.fixed[v] {
+                    continue;
+                }
+                let cur = &mut v0[dim * v..dim * v + dim];
+                if let Some(first) = v_from[v] {
+                    if cur != vel.as_slice() {
+                        return Err(self.invalid(
+                            l.line,
+                            format!("{}.velocity", l.key),
+                            fmt_list(&vel),
+                            format!(
+                                "vertex {k} of body {:?} is welded to body {:?}, whose velocity is \
+                                 {:?}: a free welded vertex needs the same velocity in every body \
+                                 holding it",
+                                l.name, names[first], cur
+                            ),
+                        ));
+                    }
+                } else {
+                    cur.copy_from_slice(&vel);
+                    v_from[v] = Some(bi);
+                }
+            }
+        }
         Ok(SceneFile {
             scene: Scene {
                 name,
@@ -1317,9 +1509,177 @@ impl Ctx<'_> {
                 x0,
             },
             solver,
+            dynamics,
             path: path.to_path_buf(),
             body_names: names,
+            densities: specs.iter().map(|s| s.density).collect(),
+            v0,
+            gravity: gravity.map(|(g, _)| g),
+            body_lines: loaded.iter().map(|l| l.line).collect(),
         })
+    }
+
+    /// The global vertex of each body's local vertex, and which bodies share a vertex
+    /// (row-major `nb × nb`). Vertices are numbered body by body in file order; the welds
+    /// merge vertices into classes (chains `a~b, b~c` into one, a cycle's closing weld is
+    /// redundant), and a class takes the number of its first occurrence. Each weld must name
+    /// existing bodies and vertices, two vertices at the same position (to
+    /// [`WELD_TOL`] × the longer longest edge of the two bodies, in the reference and the
+    /// initial configuration), and may not merge two vertices of one body, directly or
+    /// through a chain.
+    #[allow(clippy::type_complexity)]
+    fn resolve_welds(
+        &self,
+        welds: &[Spanned<WeldSpec>],
+        loaded: &[Loaded],
+    ) -> Result<(Vec<Vec<usize>>, Vec<bool>), SceneFileError> {
+        let nb = loaded.len();
+        let mut offsets = Vec::with_capacity(nb + 1);
+        offsets.push(0);
+        for l in loaded {
+            offsets.push(offsets.last().copied().unwrap_or(0) + l.x_ref.len());
+        }
+        let total = offsets[nb];
+        let names: Vec<&str> = loaded.iter().map(|l| l.name.as_str()).collect();
+        let h: Vec<f64> = loaded
+            .iter()
+            .map(|l| {
+                let mut h: f64 = 0.0;
+                for e in &l.elems {
+                    for a in 0..l.arity {
+                        for b in a + 1..l.arity {
+                            let d = (0..3)
+                                .map(|c| (l.x_ref[e[a]][c] - l.x_ref[e[b]][c]).powi(2))
+                                .sum::<f64>();
+                            h = h.max(d.sqrt());
+                        }
+                    }
+                }
+                h
+            })
+            .collect();
+        // union–find over (body, local vertex), the root of a class its smallest member
+        let mut parent: Vec<usize> = (0..total).collect();
+        let mut members: Vec<Vec<(usize, usize)>> = (0..nb)
+            .flat_map(|b| (0..loaded[b].x_ref.len()).map(move |k| vec![(b, k)]))
+            .collect();
+        fn find(parent: &mut [usize], mut v: usize) -> usize {
+            while parent[v] != v {
+                parent[v] = parent[parent[v]];
+                v = parent[v];
+            }
+            v
+        }
+        let mut welded = vec![false; nb * nb];
+        for (k, w) in welds.iter().enumerate() {
+            let line = self.line(w.span().start);
+            let (a, i, b, j) = w.get_ref();
+            let key = format!("weld[{k}]");
+            let value = format!("[{a:?}, {i}, {b:?}, {j}]");
+            let body = |n: &str| {
+                names.iter().position(|m| *m == n).ok_or_else(|| {
+                    self.invalid(
+                        line,
+                        &key,
+                        &value,
+                        format!("no body is named {n:?} (bodies: {})", names.join(", ")),
+                    )
+                })
+            };
+            let (ba, bb) = (body(a)?, body(b)?);
+            for (bi, v) in [(ba, *i), (bb, *j)] {
+                let nv = loaded[bi].x_ref.len();
+                if v < 0 || v as u64 >= nv as u64 {
+                    return Err(self.invalid(
+                        line,
+                        &key,
+                        &value,
+                        format!(
+                            "body {:?} has no vertex {v} (it has {nv}, numbered from 0)",
+                            names[bi]
+                        ),
+                    ));
+                }
+            }
+            let (i, j) = (*i as usize, *j as usize);
+            if ba == bb {
+                return Err(self.invalid(
+                    line,
+                    &key,
+                    &value,
+                    format!(
+                        "welds body {:?} to itself: a weld joins vertices of two different \
+                         bodies (merge the vertices in the body's own mesh instead)",
+                        names[ba]
+                    ),
+                ));
+            }
+            let tol = WELD_TOL * h[ba].max(h[bb]);
+            for (conf, pa, pb) in [
+                ("reference", &loaded[ba].x_ref[i], &loaded[bb].x_ref[j]),
+                ("initial", &loaded[ba].x0[i], &loaded[bb].x0[j]),
+            ] {
+                let d = (0..3).map(|c| (pa[c] - pb[c]).powi(2)).sum::<f64>().sqrt();
+                if d.is_nan() || d > tol {
+                    return Err(self.invalid(
+                        line,
+                        &key,
+                        &value,
+                        format!(
+                            "the two vertices are at distance {d:e} > {tol:e} in the {conf} \
+                             configuration ({pa:?} and {pb:?}); welded vertices must coincide \
+                             (tolerance {WELD_TOL:e} × the longer of the two bodies' longest \
+                             edges)"
+                        ),
+                    ));
+                }
+            }
+            welded[ba * nb + bb] = true;
+            welded[bb * nb + ba] = true;
+            let (ra, rb) = (
+                find(&mut parent, offsets[ba] + i),
+                find(&mut parent, offsets[bb] + j),
+            );
+            if ra == rb {
+                continue; // already one vertex (a chain closed into a cycle, or a repeat)
+            }
+            // two vertices of one body in the merged class: the body would fold onto itself
+            for &(b1, k1) in &members[ra] {
+                if let Some(&(_, k2)) = members[rb].iter().find(|&&(b2, _)| b2 == b1) {
+                    return Err(self.invalid(
+                        line,
+                        &key,
+                        &value,
+                        format!(
+                            "merges vertices {k1} and {k2} of body {:?} (through a chain of \
+                             welds): a weld joins vertices of two different bodies, at most \
+                             one vertex of each body",
+                            names[b1]
+                        ),
+                    ));
+                }
+            }
+            let (root, other) = (ra.min(rb), ra.max(rb));
+            parent[other] = root;
+            let moved = std::mem::take(&mut members[other]);
+            members[root].extend(moved);
+        }
+        // numbering: body by body; a class takes the number of its first (smallest) member
+        let mut number = vec![usize::MAX; total];
+        let mut next = 0;
+        for f in 0..total {
+            let r = find(&mut parent, f);
+            if r == f {
+                number[f] = next;
+                next += 1;
+            } else {
+                number[f] = number[r];
+            }
+        }
+        let global = (0..nb)
+            .map(|b| number[offsets[b]..offsets[b + 1]].to_vec())
+            .collect();
+        Ok((global, welded))
     }
 
     /// The symmetric body mask of `[contact]` (row-major `nb × nb`).
@@ -1385,11 +1745,21 @@ impl Ctx<'_> {
     }
 }
 
-/// The closest pair in the bodies' own numbering.
-fn describe(mesh: &Mesh, offsets: &[usize], names: &[String], pair: &ClosestPair) -> String {
+/// The closest pair in the bodies' own numbering (a welded vertex: in the first body that
+/// holds it).
+fn describe(mesh: &Mesh, names: &[String], pair: &ClosestPair) -> String {
+    let loc = |b: usize, v: usize| {
+        mesh.bodies[b]
+            .vertices
+            .iter()
+            .position(|&w| w == v)
+            .unwrap_or(v)
+    };
     let vb = |v: usize| {
-        let b = offsets.partition_point(|&o| o <= v) - 1;
-        format!("vertex {} of body {:?}", v - offsets[b], names[b])
+        let b = (0..mesh.bodies.len())
+            .find(|&b| mesh.bodies[b].vertices.contains(&v))
+            .unwrap_or(0);
+        format!("vertex {} of body {:?}", loc(b, v), names[b])
     };
     let local = |list: &dyn Fn(&Body) -> &Vec<usize>, owner: usize, k: usize| {
         list(&mesh.bodies[owner])
@@ -1403,8 +1773,8 @@ fn describe(mesh: &Mesh, offsets: &[usize], names: &[String], pair: &ClosestPair
         format!(
             "edge {} [{}, {}] of body {:?}",
             local(&|b: &Body| &b.edges, b, a),
-            e[0] - offsets[b],
-            e[1] - offsets[b],
+            loc(b, e[0]),
+            loc(b, e[1]),
             names[b]
         )
     };
@@ -1414,9 +1784,9 @@ fn describe(mesh: &Mesh, offsets: &[usize], names: &[String], pair: &ClosestPair
         format!(
             "face {} [{}, {}, {}] of body {:?}",
             local(&|b: &Body| &b.faces, b, t),
-            f[0] - offsets[b],
-            f[1] - offsets[b],
-            f[2] - offsets[b],
+            loc(b, f[0]),
+            loc(b, f[1]),
+            loc(b, f[2]),
             names[b]
         )
     };

@@ -4,7 +4,7 @@
 //! built-in twins.
 
 use contactlab::outer::{run, OuterSettings};
-use contactlab::scene::{ring, rod, sheets, solids, Scene};
+use contactlab::scene::{balloons, balloons3d, ring, rod, sheets, solids, Scene};
 use contactlab::scenefile;
 use contactlab_solvers::{backend_from_name, QpSettings};
 use std::path::Path;
@@ -124,6 +124,40 @@ const CORPUS: &[(&str, &[&str])] = &[
     ("wrong_type.toml", &[":2:", "\"small\""]),
     ("z_in_2d.toml", &["z_in_2d.obj:2", "vertex 1", "z = 0.25"]),
     (
+        "weld_unknown_body.toml",
+        &[":3:", "weld[0]", "no body is named \"uper\""],
+    ),
+    (
+        "weld_out_of_range.toml",
+        &[":3:", "weld[0]", "body \"upper\" has no vertex 3"],
+    ),
+    (
+        "weld_far_apart.toml",
+        &[":3:", "weld[0]", "distance 5e-1", "reference configuration"],
+    ),
+    (
+        "weld_same_body.toml",
+        &[":3:", "weld[0]", "welds body \"lower\" to itself"],
+    ),
+    ("weld_wrong_shape.toml", &[":3:", "tuple of size 4"]),
+    (
+        "weld_chain_folds_body.toml",
+        &[":7:", "weld[2]", "merges vertices 0 and 2 of body \"a\""],
+    ),
+    (
+        "dynamics_bad_scheme.toml",
+        &[":4:", "dynamics.scheme", "\"rk4\""],
+    ),
+    (
+        "velocity_wrong_length.toml",
+        &[
+            ":4:",
+            "body[0].velocity",
+            "[1.0, 0.0, 0.0]",
+            "2 finite numbers",
+        ],
+    ),
+    (
         "zero_area_triangle.toml",
         &["zero_area_triangle.msh:12", "triangle 0", "zero area"],
     ),
@@ -208,6 +242,33 @@ fn assert_same_scene(file: &Scene, builtin: &Scene) {
         sorted(a.faces.iter().map(|e| e.to_vec()).collect()),
         sorted(b.faces.iter().map(|e| e.to_vec()).collect())
     );
+    // the same bodies (by name; a scene file may order them differently), each with the same
+    // vertex list (a welded vertex listed by every body holding it) and contact elements
+    assert_eq!(a.bodies.len(), b.bodies.len());
+    for bb in &b.bodies {
+        let ba = a
+            .bodies
+            .iter()
+            .find(|x| x.name == bb.name)
+            .unwrap_or_else(|| panic!("{}: no body {:?} in the file", builtin.name, bb.name));
+        assert_eq!(ba.kind, bb.kind, "{}", bb.name);
+        assert_eq!(ba.vertices, bb.vertices, "{}: vertices", bb.name);
+        let edges = |m: &contactlab::mesh::Mesh, body: &contactlab::mesh::Body| {
+            sorted(body.edges.iter().map(|&e| m.edges[e].to_vec()).collect())
+        };
+        assert_eq!(edges(a, ba), edges(b, bb), "{}: edges", bb.name);
+        let faces = |m: &contactlab::mesh::Mesh, body: &contactlab::mesh::Body| {
+            sorted(body.faces.iter().map(|&f| m.faces[f].to_vec()).collect())
+        };
+        assert_eq!(faces(a, ba), faces(b, bb), "{}: faces", bb.name);
+    }
+    assert!(
+        (file.h - builtin.h).abs() <= 1e-12 * builtin.h,
+        "{}: h {} vs {}",
+        builtin.name,
+        file.h,
+        builtin.h
+    );
     // J and ∇J at φ_0 and at a perturbed state, to round-off
     let mut y = file.x0.clone();
     for (k, v) in y.iter_mut().enumerate() {
@@ -267,6 +328,14 @@ fn scenefiles_builtin_twins_same_scene_and_run() {
             scene_file("solids"),
             solids::build(&Default::default()).unwrap(),
         ),
+        (
+            scene_file("balloons"),
+            balloons::build(&Default::default()).unwrap(),
+        ),
+        (
+            scene_file("balloons3d"),
+            balloons3d::build(&Default::default()).unwrap(),
+        ),
     ];
     for (f, b) in &twins {
         assert_same_scene(f, b);
@@ -294,7 +363,67 @@ fn scenefiles_every_experiment_scene_loads() {
         }
     }
     assert_eq!(
-        n, 6,
-        "ring, rod, sheets, solids, solids_noself, two_strings"
+        n, 9,
+        "ring, rod, sheets, solids, solids_noself, two_strings, balloons, balloons3d, drop"
     );
+}
+
+/// Three strings meeting at one point, welded in a chain `a~b, b~c` plus the closing `c~a`:
+/// one vertex, numbered where it first occurs (body `a`), listed by the three bodies, fixed
+/// because `b` fixes it; the order of the weld entries does not change the mesh.
+#[test]
+fn scenefiles_weld_chains_and_cycles_are_one_vertex() {
+    let text = |welds: &str| {
+        format!(
+            r#"dim = 2
+eps = 0.01
+weld = [{welds}]
+
+[[body]]
+name = "a"
+kind = "curve"
+vertices = [[1.0, 0.0], [0.0, 0.0]]
+elements = [[0, 1]]
+material = {{ model = "string", mu = 1.0 }}
+fixed = {{ vertices = [0] }}
+
+[[body]]
+name = "b"
+kind = "curve"
+vertices = [[0.0, 0.0], [-1.0, 0.0]]
+elements = [[0, 1]]
+material = {{ model = "string", mu = 1.0 }}
+fixed = {{ vertices = [0, 1] }}
+
+[[body]]
+name = "c"
+kind = "curve"
+vertices = [[0.0, 1.0], [0.0, 0.0]]
+elements = [[0, 1]]
+material = {{ model = "string", mu = 1.0 }}
+fixed = {{ vertices = [0] }}
+"#
+        )
+    };
+    let load = |welds: &str| scenefile::parse(&text(welds), Path::new("chain.toml")).unwrap();
+    let chain = load(r#"["a", 1, "b", 0], ["b", 0, "c", 1], ["c", 1, "a", 1]"#);
+    let m = &chain.scene.mesh;
+    assert_eq!(m.nv(), 4);
+    let lists: Vec<&Vec<usize>> = m.bodies.iter().map(|b| &b.vertices).collect();
+    assert_eq!(lists, [&vec![0, 1], &vec![1, 2], &vec![3, 1]]);
+    assert_eq!(m.x_ref, [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0]);
+    assert_eq!(m.fixed, [true, true, true, true]);
+    assert_eq!(m.edges, [[0, 1], [1, 2], [3, 1]]);
+    for welds in [
+        r#"["c", 1, "b", 0], ["a", 1, "c", 1]"#,
+        r#"["b", 0, "a", 1], ["c", 1, "b", 0], ["a", 1, "c", 1], ["a", 1, "b", 0]"#,
+    ] {
+        let other = load(welds);
+        let o = &other.scene.mesh;
+        assert_eq!(o.x_ref, m.x_ref, "{welds}");
+        assert_eq!(o.fixed, m.fixed, "{welds}");
+        assert_eq!(o.edges, m.edges, "{welds}");
+        let ol: Vec<&Vec<usize>> = o.bodies.iter().map(|b| &b.vertices).collect();
+        assert_eq!(ol, lists, "{welds}");
+    }
 }
