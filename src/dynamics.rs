@@ -630,7 +630,10 @@ pub fn simulate(
             rec.min_distance = res.min_distance.distance;
             rec.admissible = admissible;
             rec.active_contacts = forces.iter().filter(|f| f.active).count();
-            rec.contact_force = forces.iter().filter(|f| f.active).map(|f| f.force).sum();
+            rec.contact_force = forces
+                .iter()
+                .filter(|f| f.active)
+                .fold(0.0, |s, f| s + f.force);
             rec.outer_iterations = res.outer_iterations;
             rec.status = res.status.as_str();
             rec.wall_time_s = res.wall_time_s;
