@@ -231,47 +231,29 @@ fn scene_from_file(
     }
     let f = contactlab::scenefile::load(std::path::Path::new(&a.scene))?;
     let s = &f.solver;
-    if !explicit("backend") {
-        if let Some(v) = &s.backend {
-            a.backend = v.clone();
-        }
+    // A flag given on the command line wins over the file's `[solver]` value.
+    macro_rules! from_file {
+        ($id:literal, $field:ident) => {
+            from_file!($id, $field, |v| Ok::<_, anyhow::Error>(v))
+        };
+        ($id:literal, $field:ident, $convert:expr) => {
+            if !explicit($id) {
+                if let Some(v) = s.$field.clone() {
+                    a.$field = $convert(v)?;
+                }
+            }
+        };
     }
-    if !explicit("accuracy") {
-        if let Some(v) = &s.accuracy {
-            a.accuracy = parse_accuracy(v).map_err(anyhow::Error::msg)?;
-        }
-    }
-    if !explicit("pruning") {
-        if let Some(v) = s.pruning {
-            a.pruning = v;
-        }
-    }
-    if !explicit("max_outer") {
-        if let Some(v) = s.max_outer {
-            a.max_outer = v;
-        }
-    }
-    if !explicit("max_inner") {
-        if let Some(v) = s.max_inner {
-            a.max_inner = v;
-        }
-    }
-    if !explicit("tol_j") && s.tol_j.is_some() {
-        a.tol_j = s.tol_j;
-    }
-    if !explicit("qp_tol") && s.qp_tol.is_some() {
-        a.qp_tol = s.qp_tol;
-    }
-    if !explicit("lazy_start") {
-        if let Some(v) = s.lazy_start {
-            a.lazy_start = v;
-        }
-    }
-    if !explicit("trust_delta0") {
-        if let Some(v) = s.trust_delta0 {
-            a.trust_delta0 = v;
-        }
-    }
+    from_file!("backend", backend);
+    from_file!("pruning", pruning);
+    from_file!("max_outer", max_outer);
+    from_file!("max_inner", max_inner);
+    from_file!("lazy_start", lazy_start);
+    from_file!("trust_delta0", trust_delta0);
+    from_file!("tol_j", tol_j, |v| Ok::<_, anyhow::Error>(Some(v)));
+    from_file!("qp_tol", qp_tol, |v| Ok::<_, anyhow::Error>(Some(v)));
+    from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
+        .map_err(anyhow::Error::msg));
     if !explicit("no_warm_start") {
         if let Some(v) = s.warm_start {
             a.no_warm_start = !v;

@@ -427,3 +427,74 @@ fixed = {{ vertices = [0] }}
         assert_eq!(ol, lists, "{welds}");
     }
 }
+
+#[test]
+fn scenefiles_solver_table_applies_and_flags_override_it() {
+    // two_strings.toml with a [solver] table that sets every kind of key; the run's
+    // summary.json says which values were used
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("solver_table");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/scenes/two_strings.toml"),
+    )
+    .unwrap();
+    let solver = "[solver]\nbackend = \"uzawa\"\npruning = \"lazy\"\naccuracy = \"low\"\n\
+                  max_outer = 4\nmax_inner = 3\ntol_j = 1e-7\nqp_tol = 1e-7\n\
+                  lazy_start = 0.5\ntrust_delta0 = 0.5\nwarm_start = false\n";
+    let a = src.find("[solver]").unwrap();
+    let b = a + src[a..].find("\n\n").unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        format!("{}{}{}", &src[..a], solver, &src[b..]),
+    )
+    .unwrap();
+    let summary = |flags: &[&str]| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+            .arg("run")
+            .arg(dir.join("s.toml"))
+            .args(["--quiet", "--out"])
+            .arg(dir.join("run"))
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(
+            matches!(out.status.code(), Some(0 | 1)),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(dir.join("run/summary.json")).unwrap())
+            .unwrap()
+    };
+    // the file's values
+    let s = summary(&[]);
+    assert_eq!(s["backend"], "uzawa");
+    assert_eq!(s["pruning"], "lazy");
+    assert_eq!(s["accuracy"], "low");
+    assert_eq!(s["qp_tol"], 1e-7);
+    let set = &s["settings"];
+    assert_eq!(set["max_outer"], 4);
+    assert_eq!(set["tol_j"], 1e-7);
+    assert_eq!(set["lazy_start"], 0.5);
+    assert_eq!(set["trust"]["delta0"], 0.5);
+    assert_eq!(set["inner"]["max_inner"], 3);
+    assert_eq!(set["inner"]["warm_start"], false);
+    // flags given on the command line win, the rest still come from the file
+    let s = summary(&[
+        "--backend",
+        "clarabel",
+        "--max-outer",
+        "2",
+        "--accuracy",
+        "default",
+        "--tol-j",
+        "1e-9",
+    ]);
+    assert_eq!(s["backend"], "clarabel");
+    assert_eq!(s["accuracy"], "default");
+    assert_eq!(s["settings"]["max_outer"], 2);
+    assert_eq!(s["settings"]["tol_j"], 1e-9);
+    assert_eq!(s["pruning"], "lazy");
+    assert_eq!(s["settings"]["inner"]["max_inner"], 3);
+    assert_eq!(s["qp_tol"], 1e-7);
+}
