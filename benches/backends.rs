@@ -3,7 +3,7 @@
 //!
 //! - `backends/captured/{backend}/{n}`: the balloons at `n ∈ {20, 40, 80}` elements per
 //!   membrane are solved once with Clarabel (default preset, lazy rows) while
-//!   [`contactlab::capture::Capture`] records every sub-problem QP; four of them, evenly spaced
+//!   [`contactlab::harness::capture::Capture`] records every sub-problem QP; four of them, evenly spaced
 //!   over the run (first to last), form the fixture. One iteration solves those four QPs in
 //!   order with a fresh backend (its default settings, no warm start), so no reuse state
 //!   carries over between iterations. A QP a backend does not solve still counts its time;
@@ -16,10 +16,10 @@
 
 use std::time::Duration;
 
-use contactlab::capture::Capture;
-use contactlab::geometry::point_edge_distance;
-use contactlab::outer::{run, OuterSettings};
+use contactlab::contact::distance::point_edge_distance;
+use contactlab::harness::capture::Capture;
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::solve::outer::{run, OuterSettings};
 use contactlab_solvers::{backend_from_name, default_settings, Qp, QpError, QpSolution};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::Vector2;

@@ -29,15 +29,15 @@
 
 use std::time::Duration;
 
-use contactlab::broad_phase::{min_distance_near, point_edge_near, Aabb, AabbGrid};
-use contactlab::bvh::Bvh;
+use contactlab::contact::broad_phase::{min_distance_near, point_edge_near, Aabb, AabbGrid};
+use contactlab::contact::bvh::Bvh;
+use contactlab::contact::PointEdgePair;
 use contactlab::contact::{rows_for, ContactPair};
-use contactlab::mesh::Mesh;
-use contactlab::outer::median_edge_length;
-use contactlab::pairs::PointEdgePair;
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::scene::mesh::Mesh;
 use contactlab::scene::Scene;
-use contactlab::subproblem::{build_qp, DofMap, InnerSettings};
+use contactlab::solve::outer::median_edge_length;
+use contactlab::solve::subproblem::{build_qp, DofMap, InnerSettings};
 use criterion::{
     black_box, criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };

@@ -5,11 +5,11 @@
 //!    balance J'?
 //!
 //! `cargo run --release --example creep`
-use contactlab::diagnostics::{converged_diagnostics, DiagnosticSettings};
-use contactlab::outer::{run, OuterSettings};
+use contactlab::harness::diagnostics::{converged_diagnostics, DiagnosticSettings};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::sheets::{self, SheetsParams};
 use contactlab::scene::solids::{self, SolidsParams};
+use contactlab::solve::outer::{run, OuterSettings};
 use contactlab_solvers::QpSettings;
 use contactlab_solvers::{backend_from_name, default_settings};
 

@@ -8,8 +8,8 @@
 //!
 //! `cargo run --release --example export_scenes [DIR]`
 
-use contactlab::mesh::{BodyKind, Mesh};
-use contactlab::meshio::{write_msh22, write_obj};
+use contactlab::scene::mesh::{BodyKind, Mesh};
+use contactlab::scene::meshio::{write_msh22, write_obj};
 use contactlab::scene::{balloons, balloons3d, dynamic, ring, rod, sheets, solids, Scene};
 use std::collections::HashMap;
 use std::fmt::Write as _;

@@ -1,8 +1,8 @@
 //! The balloons scene end to end: every backend, every iterate admissible, J non-increasing,
 //! backends agreeing on the final energy; an inadmissible start is refused with the pair named.
 
-use contactlab::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings};
 
 fn solve(backend: &str, params: &BalloonsParams) -> (f64, Vec<IterationRecord>, RunStatus) {

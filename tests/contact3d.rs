@@ -3,14 +3,14 @@
 //! never increases, with lazy rows and with the trust region; the backends' final energies;
 //! and a `contactlab run` directory of a 3D scene.
 
-use contactlab::outer::{run, OuterSettings, Pruning, RunStatus, TrustSettings};
-use contactlab::presets::Accuracy;
-use contactlab::rows3d::min_distance_3d;
+use contactlab::contact::min_distance_3d;
 use contactlab::scene::balloons3d::{self, Balloons3dParams};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::sheets::{self, SheetsParams};
 use contactlab::scene::solids::{self, SolidsParams};
 use contactlab::scene::Scene;
+use contactlab::solve::outer::{run, OuterSettings, Pruning, RunStatus, TrustSettings};
+use contactlab::solve::settings::Accuracy;
 use contactlab_solvers::backend_from_name;
 use std::process::Command;
 

@@ -3,7 +3,7 @@
 //! allows everything gives exactly the results of no filter.
 
 use contactlab::contact::{all_movable_pairs, min_distance, near_pairs, ContactPair};
-use contactlab::mesh::{Body, BodyKind, ContactFilter, Mesh};
+use contactlab::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use contactlab::scene::{balloons, sheets, solids};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -89,7 +89,7 @@ fn contact_filter_2d_pairs_match_the_declared_mask() {
                 if e.contains(&v) || !allowed(&mesh, &mask, p) {
                     continue;
                 }
-                let q = contactlab::geometry::point_edge_distance(
+                let q = contactlab::contact::distance::point_edge_distance(
                     &Mesh::p2(&x, v),
                     &Mesh::p2(&x, e[0]),
                     &Mesh::p2(&x, e[1]),
@@ -103,7 +103,7 @@ fn contact_filter_2d_pairs_match_the_declared_mask() {
                 if ea.iter().any(|v| eb.contains(v)) || !allowed(&mesh, &mask, p) {
                     continue;
                 }
-                let d = contactlab::geometry::edge_edge_distance_2d(
+                let d = contactlab::contact::distance::edge_edge_distance_2d(
                     &Mesh::p2(&x, ea[0]),
                     &Mesh::p2(&x, ea[1]),
                     &Mesh::p2(&x, eb[0]),
@@ -148,7 +148,7 @@ fn contact_filter_3d_pairs_match_the_declared_mask() {
         assert_eq!(all_movable_pairs(&mesh), keep(&unfiltered_all));
         // the exact check: the brute-force form over the same filter
         let md = min_distance(&mesh, &x, 1e-3, false);
-        let (brute, _) = contactlab::rows3d::min_distance_3d_filtered(
+        let (brute, _) = contactlab::contact::min_distance_3d_filtered(
             &x,
             &mesh.contact_vertices(),
             &mesh.edges,

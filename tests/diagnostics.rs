@@ -2,14 +2,14 @@
 //! stationarity (the sign convention of SPEC §3, not the paper's printed one), are
 //! non-negative and complementary, and the Lemma 5.6 bound holds at the fixed point.
 
-use contactlab::diagnostics::{
+use contactlab::harness::diagnostics::{
     converged_diagnostics, h1_gram, stationarity_residual, DiagnosticSettings,
 };
-use contactlab::outer::{run, OuterSettings, RunStatus};
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::solve::outer::{run, OuterSettings, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings, QpSettings};
 
-fn diagnose(n: usize, backend: &str) -> contactlab::diagnostics::ConvergedDiagnostics {
+fn diagnose(n: usize, backend: &str) -> contactlab::harness::diagnostics::ConvergedDiagnostics {
     let scene = build(&BalloonsParams {
         n,
         ..Default::default()
@@ -148,8 +148,8 @@ fn gram_matrix_integrates_constants_and_gradients() {
     for body in &mesh.bodies {
         for &e in &body.edges {
             let [a, b] = mesh.edges[e];
-            let l = (contactlab::mesh::Mesh::p2(&mesh.x_ref, a)
-                - contactlab::mesh::Mesh::p2(&mesh.x_ref, b))
+            let l = (contactlab::scene::mesh::Mesh::p2(&mesh.x_ref, a)
+                - contactlab::scene::mesh::Mesh::p2(&mesh.x_ref, b))
             .norm();
             match (mesh.fixed[a], mesh.fixed[b]) {
                 (false, false) => {

@@ -4,10 +4,12 @@
 //! without a density is refused with its name; `drop` written as a scene file takes the same
 //! time steps as the built-in `drop`.
 
-use contactlab::dynamics::{lumped_mass, simulate, DynamicResult, DynamicSettings, Scheme, System};
-use contactlab::outer::OuterSettings;
 use contactlab::scene::dynamic::{drop, DropParams, DynamicScene};
-use contactlab::scenefile;
+use contactlab::scene::file;
+use contactlab::solve::dynamics::{
+    lumped_mass, simulate, DynamicResult, DynamicSettings, Scheme, System,
+};
+use contactlab::solve::outer::OuterSettings;
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -215,7 +217,7 @@ fn steps(ds: &mut DynamicScene, steps: usize) -> DynamicResult {
 /// same outer iterations per step and the same energies and positions to round-off.
 #[test]
 fn dynamic_scenefile_drop_twin_takes_the_same_steps() {
-    let mut f = scenefile::load(&data("experiments/scenes/drop.toml"))
+    let mut f = file::load(&data("experiments/scenes/drop.toml"))
         .unwrap()
         .into_dynamic()
         .unwrap();

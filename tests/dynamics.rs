@@ -2,13 +2,13 @@
 //! admissible, implicit Euler's energy without external forces, Newmark's drift, and the
 //! conservation of linear momentum through a head-on impact.
 
-use contactlab::dynamics::{
-    lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, PairForce, Scheme, System,
-};
-use contactlab::outer::{roundoff_allowance, OuterSettings};
 use contactlab::scene::dynamic::{
     collide, drop, drop3d, CollideParams, Drop3dParams, DropParams, DynamicScene,
 };
+use contactlab::solve::dynamics::{
+    lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, PairForce, Scheme, System,
+};
+use contactlab::solve::outer::{roundoff_allowance, OuterSettings};
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::time::Instant;
 

@@ -2,10 +2,10 @@
 //! equals, bit for bit, the QP the run solved (captured in-process by the same deterministic
 //! run).
 
-use contactlab::capture::Capture;
-use contactlab::outer::{run, OuterSettings, Pruning};
-use contactlab::presets::Accuracy;
+use contactlab::harness::capture::Capture;
 use contactlab::scene::ring::{build, RingParams};
+use contactlab::solve::outer::{run, OuterSettings, Pruning};
+use contactlab::solve::settings::Accuracy;
 use contactlab_solvers::qps::read_qps_file;
 use contactlab_solvers::{backend_from_name, Qp, QpError, QpSolution};
 use std::path::Path;

@@ -5,9 +5,9 @@
 //! solve, so the failure path is exercised deterministically.
 
 use contactlab::contact::min_distance;
-use contactlab::outer::{run, OuterSettings, RunError, RunStatus};
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::Scene;
+use contactlab::solve::outer::{run, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::{
     backend_from_name, default_settings, Qp, QpBackend, QpError, QpSolution, QpStatus, WarmStart,
 };

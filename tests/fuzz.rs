@@ -12,11 +12,11 @@
 //! multiplies every case count by `K`, e.g. `CONTACTLAB_FUZZ_SCALE=100 cargo test --release
 //! --test fuzz`.
 
-use contactlab::geometry::{
-    point_edge_distance, point_triangle_distance, segment_segment_distance,
+use contactlab::contact::distance::{
+    edge_edge_distance, point_edge_distance, point_triangle_distance,
 };
-use contactlab::meshio::{msh::parse_msh, obj::parse_obj};
-use contactlab::scenefile;
+use contactlab::scene::file;
+use contactlab::scene::meshio::{msh::parse_msh, obj::parse_obj};
 use nalgebra::{Vector2, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -172,8 +172,8 @@ fn fuzz_scene_parser_never_panics() {
     ];
     let n = 300 * scale();
     fuzz(1, &seeds, n, &|t: &str| {
-        let _ = scenefile::parse(t, &ring_path);
-        let _ = scenefile::parse(t, &good_path);
+        let _ = file::parse(t, &ring_path);
+        let _ = file::parse(t, &good_path);
     });
 }
 
@@ -208,7 +208,8 @@ fn fuzz_read_mesh_file_on_random_files_never_panics() {
         let p = dir.join(format!("f{case}.{ext}"));
         let k = rng.gen_range(0..300);
         std::fs::write(&p, (0..k).map(|_| rng.gen()).collect::<Vec<u8>>()).unwrap();
-        let r = std::panic::catch_unwind(|| contactlab::meshio::read_mesh_file(Path::new(&p)));
+        let r =
+            std::panic::catch_unwind(|| contactlab::scene::meshio::read_mesh_file(Path::new(&p)));
         assert!(r.is_ok(), "panic on {}", p.display());
     }
 }
@@ -325,14 +326,14 @@ fn fuzz_segment_segment_no_nan_symmetric_and_matches_sampling() {
             let t = rng.gen_range(-2.0..2.0);
             p[3] = p[2] + (p[1] - p[0]) * t;
         }
-        let r = segment_segment_distance(&p[0], &p[1], &p[2], &p[3]);
+        let r = edge_edge_distance(&p[0], &p[1], &p[2], &p[3]);
         assert!(r.distance.is_finite() && r.distance >= 0.0, "{p:?} {r:?}");
         assert!(r.s.is_finite() && r.t.is_finite());
         let scale: f64 = p.iter().map(|v| v.norm()).sum();
         for s in [
-            segment_segment_distance(&p[2], &p[3], &p[0], &p[1]),
-            segment_segment_distance(&p[1], &p[0], &p[2], &p[3]),
-            segment_segment_distance(&p[0], &p[1], &p[3], &p[2]),
+            edge_edge_distance(&p[2], &p[3], &p[0], &p[1]),
+            edge_edge_distance(&p[1], &p[0], &p[2], &p[3]),
+            edge_edge_distance(&p[0], &p[1], &p[3], &p[2]),
         ] {
             assert!((s.distance - r.distance).abs() <= 1e-12 * scale, "{p:?}");
         }

@@ -2,9 +2,9 @@
 //! φ is admissible. The φ are taken ON the boundary of T(ψ) (the largest step along a random
 //! direction that stays in T(ψ)), where the lemma is tightest.
 
-use contactlab::mesh::{Body, BodyKind, Mesh};
-use contactlab::pairs::{check_admissible, point_edge_pairs};
-use contactlab::rows::point_edge_rows;
+use contactlab::contact::point_edge_rows;
+use contactlab::contact::{check_admissible, point_edge_pairs};
+use contactlab::scene::mesh::{Body, BodyKind, Mesh};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

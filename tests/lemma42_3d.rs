@@ -2,7 +2,7 @@
 //! over all disjoint vertex–triangle and edge–edge pairs, and no edge through a triangle); and
 //! Remark 4.3: with vertex–triangle rows alone, two edges pass through each other.
 
-use contactlab::rows3d::{all_rows_3d, min_distance_3d, Closest3, Row3};
+use contactlab::contact::{all_rows_3d, min_distance_3d, Closest3, Row3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -148,9 +148,9 @@ fn remark43_edges_pass_through_without_edge_edge_rows() {
 /// search, and the BVH form of the exact check gives the same minimum.
 #[test]
 fn broad_phase_3d_matches_all_pairs() {
-    use contactlab::geometry::{point_triangle_distance, segment_segment_distance};
-    use contactlab::rows3d::p3;
-    use contactlab::rows3d::{min_distance_3d_bvh, near_pairs_3d};
+    use contactlab::contact::distance::{edge_edge_distance, point_triangle_distance};
+    use contactlab::contact::p3;
+    use contactlab::contact::{min_distance_3d_bvh, near_pairs_3d};
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     for trial in 0..40 {
         let nt = 30;
@@ -199,13 +199,9 @@ fn broad_phase_3d_matches_all_pairs() {
                 if a.iter().any(|v| b.contains(v)) {
                     continue;
                 }
-                let d = segment_segment_distance(
-                    &p3(&x, a[0]),
-                    &p3(&x, a[1]),
-                    &p3(&x, b[0]),
-                    &p3(&x, b[1]),
-                )
-                .distance;
+                let d =
+                    edge_edge_distance(&p3(&x, a[0]), &p3(&x, a[1]), &p3(&x, b[0]), &p3(&x, b[1]))
+                        .distance;
                 if d < r {
                     ee.push((ai, bi, d));
                 }

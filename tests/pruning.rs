@@ -3,9 +3,9 @@
 //! final energy, every pruned iterate passes the exact ALL-PAIRS admissibility check (the O(N²)
 //! reference, not the broad phase), and results do not depend on the number of threads.
 
-use contactlab::outer::{run, OuterSettings, Pruning, RunStatus};
-use contactlab::pairs::{check_admissible, point_edge_pairs};
+use contactlab::contact::{check_admissible, point_edge_pairs};
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::solve::outer::{run, OuterSettings, Pruning, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings};
 
 struct Trace {

@@ -2,9 +2,9 @@
 //! to end: the outer loop converges with every iterate admissible and J non-increasing, the
 //! final state has self-contact between the two halves, and the three backends agree.
 
-use contactlab::outer::{run, IterationRecord, OuterSettings, RunResult, RunStatus};
 use contactlab::scene::ring::{build, classify_state, self_contact_pairs, RingParams, RingPins};
 use contactlab::scene::Scene;
+use contactlab::solve::outer::{run, IterationRecord, OuterSettings, RunResult, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::time::Instant;
 

@@ -3,9 +3,9 @@
 //! built-in scenes in `experiments/scenes/` give the same scene and the same run as their
 //! built-in twins.
 
-use contactlab::outer::{run, OuterSettings};
+use contactlab::scene::file;
 use contactlab::scene::{balloons, balloons3d, ring, rod, sheets, solids, Scene};
-use contactlab::scenefile;
+use contactlab::solve::outer::{run, OuterSettings};
 use contactlab_solvers::{backend_from_name, QpSettings};
 use std::path::Path;
 use std::process::Command;
@@ -210,7 +210,7 @@ fn scenefiles_malformed_corpus_gives_named_errors_and_exit_2() {
 #[test]
 fn scenefiles_good_file_loads() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/good_strings.toml");
-    let f = scenefile::load(&p).unwrap();
+    let f = file::load(&p).unwrap();
     assert_eq!(f.scene.mesh.nv(), 6);
     assert_eq!(f.scene.mesh.edges.len(), 4);
     assert_eq!(f.body_names, vec!["lower", "upper"]);
@@ -253,11 +253,11 @@ fn assert_same_scene(file: &Scene, builtin: &Scene) {
             .unwrap_or_else(|| panic!("{}: no body {:?} in the file", builtin.name, bb.name));
         assert_eq!(ba.kind, bb.kind, "{}", bb.name);
         assert_eq!(ba.vertices, bb.vertices, "{}: vertices", bb.name);
-        let edges = |m: &contactlab::mesh::Mesh, body: &contactlab::mesh::Body| {
+        let edges = |m: &contactlab::scene::mesh::Mesh, body: &contactlab::scene::mesh::Body| {
             sorted(body.edges.iter().map(|&e| m.edges[e].to_vec()).collect())
         };
         assert_eq!(edges(a, ba), edges(b, bb), "{}: edges", bb.name);
-        let faces = |m: &contactlab::mesh::Mesh, body: &contactlab::mesh::Body| {
+        let faces = |m: &contactlab::scene::mesh::Mesh, body: &contactlab::scene::mesh::Body| {
             sorted(body.faces.iter().map(|&f| m.faces[f].to_vec()).collect())
         };
         assert_eq!(faces(a, ba), faces(b, bb), "{}: faces", bb.name);
@@ -309,7 +309,7 @@ fn scene_file(name: &str) -> Scene {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("experiments/scenes")
         .join(format!("{name}.toml"));
-    scenefile::load(&p).unwrap().scene
+    file::load(&p).unwrap().scene
 }
 
 #[test]
@@ -357,7 +357,7 @@ fn scenefiles_every_experiment_scene_loads() {
     for e in std::fs::read_dir(&dir).unwrap() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "toml") {
-            let f = scenefile::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            let f = file::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             assert!(f.scene.mesh.nv() > 0);
             n += 1;
         }
@@ -405,7 +405,7 @@ fixed = {{ vertices = [0] }}
 "#
         )
     };
-    let load = |welds: &str| scenefile::parse(&text(welds), Path::new("chain.toml")).unwrap();
+    let load = |welds: &str| file::parse(&text(welds), Path::new("chain.toml")).unwrap();
     let chain = load(r#"["a", 1, "b", 0], ["b", 0, "c", 1], ["c", 1, "a", 1]"#);
     let m = &chain.scene.mesh;
     assert_eq!(m.nv(), 4);

@@ -2,7 +2,7 @@
 //! semi-definite, element by element).
 //!
 //! All functions take the flat position vector `x` (`dim` coordinates per vertex) and use the
-//! degree-of-freedom numbering `dim*v + k` of [`crate::mesh`].
+//! degree-of-freedom numbering `dim*v + k` of [`crate::scene::mesh`].
 //!
 //! # Parallelism and determinism
 //!

@@ -6,6 +6,7 @@
 //! reader never sees a half-written file.
 
 pub mod loglog;
+pub mod plot;
 pub mod svg;
 pub mod timeseries;
 pub mod vtk;

@@ -12,7 +12,7 @@
 
 use super::Scene;
 use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh};
+use crate::scene::mesh::{Body, BodyKind, Mesh};
 use thiserror::Error;
 
 /// Parameters of the balloons scene.

@@ -37,9 +37,9 @@
 
 use super::sheets::unique_edges;
 use super::Scene;
+use crate::contact::min_distance_3d_bvh;
 use crate::energy::{Gas3dEnergy, Membrane3dEnergy, OpenSurface, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh, MeshError};
-use crate::rows3d::min_distance_3d_bvh;
+use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 use thiserror::Error;
@@ -467,7 +467,7 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rows3d::p3;
+    use crate::contact::p3;
 
     #[test]
     fn balloons3d_icosphere_counts() {

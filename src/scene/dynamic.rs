@@ -19,7 +19,7 @@
 
 use super::Scene;
 use crate::energy::{Gravity, Gravity3d, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
 
 /// A scene for a dynamic run.
@@ -307,7 +307,7 @@ pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
     });
     mesh.validate()?;
     let density = vec![p.density, 0.0];
-    let mass = crate::dynamics::lumped_mass(&mesh, &mesh.x_ref, &density)
+    let mass = crate::solve::dynamics::lumped_mass(&mesh, &mesh.x_ref, &density)
         .expect("one density per body, all finite");
     let energy = TotalEnergy {
         terms: vec![
@@ -654,7 +654,7 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
 mod tests {
     use super::*;
     use crate::contact::min_distance;
-    use crate::dynamics::lumped_mass;
+    use crate::solve::dynamics::lumped_mass;
 
     #[test]
     fn dynamic_scenes_build_admissible_with_the_expected_masses() {

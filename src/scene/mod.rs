@@ -3,13 +3,17 @@
 pub mod balloons;
 pub mod balloons3d;
 pub mod dynamic;
+pub mod file;
+pub mod mesh;
+pub mod meshio;
+pub mod registry;
 pub mod ring;
 pub mod rod;
 pub mod sheets;
 pub mod solids;
 
 use crate::energy::TotalEnergy;
-use crate::mesh::Mesh;
+use crate::scene::mesh::Mesh;
 
 /// Everything the outer loop needs.
 pub struct Scene {

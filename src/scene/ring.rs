@@ -33,9 +33,9 @@
 //! stretched membrane makes the Hessian positive definite.
 
 use super::Scene;
-use crate::broad_phase::{min_distance_near, point_edge_near, NearPair};
+use crate::contact::broad_phase::{min_distance_near, point_edge_near, NearPair};
 use crate::energy::{MembraneEnergy, PressureEnergy, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh};
+use crate::scene::mesh::{Body, BodyKind, Mesh};
 use thiserror::Error;
 
 /// Which vertices of the ring are fixed (Dirichlet).
@@ -285,7 +285,7 @@ pub fn self_contact_pairs(mesh: &Mesh, x: &[f64], eps: f64) -> Vec<NearPair> {
 
 /// The state reached, from the contact pattern: `self_contact` when some
 /// [`self_contact_pairs`] pair exists, else `no_contact`. (The body-level
-/// [`crate::diagnostics::contact_pattern`] would also count along-curve neighbours at a sharp
+/// [`crate::harness::diagnostics::contact_pattern`] would also count along-curve neighbours at a sharp
 /// fold as self-contact; this does not.)
 pub fn classify_state(mesh: &Mesh, x: &[f64], eps: f64) -> String {
     if self_contact_pairs(mesh, x, eps).is_empty() {

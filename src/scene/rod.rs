@@ -49,9 +49,9 @@
 //! crossing. With the four pins and every strand in tension there is no zero-energy motion.
 
 use super::Scene;
+use crate::contact::min_distance_3d_bvh;
 use crate::energy::{Gravity3d, String3dEnergy, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh, MeshError};
-use crate::rows3d::min_distance_3d_bvh;
+use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
 
 /// Stretch of every upper-strand edge in `x0` (in tension, so the Hessian has no zero
@@ -374,7 +374,7 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rows3d::p3;
+    use crate::contact::p3;
 
     #[test]
     fn rod_default_mesh_counts_and_admissibility() {

@@ -49,9 +49,9 @@
 //! 2 steps even at `weight = 0.3`.
 
 use super::Scene;
+use crate::contact::min_distance_3d_bvh;
 use crate::energy::{Gravity3d, Membrane3dEnergy, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh, MeshError};
-use crate::rows3d::min_distance_3d_bvh;
+use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
 
 /// Parameters of the sheets scene.

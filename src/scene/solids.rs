@@ -36,9 +36,9 @@
 
 use super::sheets::unique_edges;
 use super::Scene;
+use crate::contact::min_distance_3d_bvh;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
-use crate::mesh::{Body, BodyKind, Mesh, MeshError};
-use crate::rows3d::min_distance_3d_bvh;
+use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use thiserror::Error;
@@ -351,7 +351,7 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rows3d::p3;
+    use crate::contact::p3;
 
     /// `Σ_faces centroid · normal · area / 3`: the volume enclosed by outward faces.
     fn enclosed_volume(x: &[f64], faces: &[[usize; 3]]) -> f64 {

@@ -13,12 +13,13 @@
 //!   message in `error`, never an abort of the sweep;
 //! - a sweep that ends with every run present rewrites its CSV in the sweep file's order.
 
-use crate::case::{self, build_scene, f, CaseSettings, RUN_COLUMNS};
+use crate::harness::case::{self, f, CaseSettings, RUN_COLUMNS};
+use crate::harness::diagnostics::h1_distance;
+use crate::scene::registry::build_scene;
+use crate::solve::dynamics::{DynamicSettings, Scheme};
+use crate::solve::outer::Pruning;
+use crate::solve::settings::Accuracy;
 use anyhow::{bail, Context, Result};
-use contactlab::diagnostics::h1_distance;
-use contactlab::dynamics::{DynamicSettings, Scheme};
-use contactlab::outer::Pruning;
-use contactlab::presets::Accuracy;
 use contactlab_solvers::BACKEND_NAMES;
 use rayon::prelude::*;
 use serde::Deserialize;
@@ -196,7 +197,7 @@ pub struct SceneBlock {
     #[serde(default)]
     pub n: Vec<usize>,
     /// Mesh sizes: each becomes the coarsest level `n` whose h is at most the value
-    /// ([`crate::case::n_for_h`]); the row's `h` column holds the scene's actual h.
+    /// ([`crate::scene::registry::n_for_h`]); the row's `h` column holds the scene's actual h.
     #[serde(default)]
     pub h: Vec<f64>,
     /// ε rule(s); default `{ c = 0.1, p = 1 }` (h/10).
@@ -497,9 +498,9 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         let mut levels = b.n.clone();
         for &h in &b.h {
             let n = if b.dynamic {
-                crate::case::dynamic_n_for_h(&b.name, h, &b.params)
+                crate::scene::registry::dynamic_n_for_h(&b.name, h, &b.params)
             } else {
-                crate::case::n_for_h(&b.name, h, &b.params)
+                crate::scene::registry::n_for_h(&b.name, h, &b.params)
             };
             levels.push(n.with_context(|| format!("scene block {} ({})", bi + 1, b.name))?);
         }
@@ -536,8 +537,9 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         for &n in &levels {
             // building the scene checks its name and parameters and gives h
             let (h, dyns) = if b.dynamic {
-                let ds = crate::case::build_dynamic_scene(&b.name, Some(n), None, &b.params)
-                    .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?;
+                let ds =
+                    crate::scene::registry::build_dynamic_scene(&b.name, Some(n), None, &b.params)
+                        .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?;
                 let dts = if b.dt.is_empty() {
                     vec![ds.dt]
                 } else {
@@ -742,7 +744,7 @@ fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
     let t = Instant::now();
     let d = spec.dynamic.as_ref().expect("a dynamic spec");
     let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
-        let mut ds = crate::case::build_dynamic_scene(
+        let mut ds = crate::scene::registry::build_dynamic_scene(
             &spec.scene,
             Some(spec.n),
             Some(spec.eps),
@@ -1112,7 +1114,7 @@ mod tests {
         assert_eq!(ns, vec![20, 32, 64]);
         assert!((runs[0].h - 0.08).abs() < 1e-15 && runs[1].h <= 0.05 && runs[2].h <= 0.1);
         // the ring's level is the coarsest even n with h ≤ 0.1
-        let coarser = crate::case::build_scene("ring", 62, None, &Default::default())
+        let coarser = crate::scene::registry::build_scene("ring", 62, None, &Default::default())
             .unwrap()
             .h;
         assert!(coarser > 0.1, "{coarser}");

@@ -6,7 +6,7 @@
 //! shared by two bodies (a membrane glued to its support) counts for both.
 
 use crate::contact::{near_pairs, pair_rows, rows_for, ContactPair, PairRows};
-use crate::mesh::{BodyKind, Mesh};
+use crate::scene::mesh::{BodyKind, Mesh};
 
 /// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact), among
 /// `pairs` (e.g. [`near_pairs`] within `1.01 ε`).

@@ -1,5 +1,5 @@
 //! A bounding volume hierarchy ([`Bvh`]) over axis-aligned boxes in `D` dimensions, with the
-//! same contract as the uniform grid [`AabbGrid`](crate::broad_phase::AabbGrid): items are
+//! same contract as the uniform grid [`AabbGrid`](crate::contact::broad_phase::AabbGrid): items are
 //! registered by index, and a query appends the items whose boxes overlap the query box,
 //! sorted and without repetition. Unlike the grid, the answer is exact: every box tested
 //! against the query box (closed intervals: `lo_i ≤ q.hi` and `q.lo ≤ hi_i` on every axis),
@@ -17,11 +17,11 @@
 //!
 //! A query is an iterative depth-first traversal with a fixed stack of node indices.
 //!
-//! The pair search of [`crate::broad_phase`] uses this tree: the bench `broad_phase/structure`
+//! The pair search of [`crate::contact::broad_phase`] uses this tree: the bench `broad_phase/structure`
 //! in `benches/pruning.rs` measured it as fast as the grid at 10³ and 10⁴ elements per membrane
 //! and 1.4× faster at 10⁵.
 
-use crate::broad_phase::Aabb;
+use crate::contact::broad_phase::Aabb;
 
 /// Maximum number of items in a leaf.
 pub const LEAF_SIZE: usize = 4;
@@ -260,7 +260,7 @@ impl<const D: usize> Bvh<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::broad_phase::AabbGrid;
+    use crate::contact::broad_phase::AabbGrid;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

@@ -9,11 +9,11 @@
 //! case is a row with its status. At the end: a log–log SVG of the time per outer iteration
 //! against the number of vertices, with fitted growth exponents.
 
+use crate::output::loglog::{loglog_slope, loglog_svg, Series};
+use crate::output::write_atomic;
+use crate::scene::balloons::{self, BalloonsParams};
+use crate::solve::outer::{run, OuterSettings, Pruning, RunStatus};
 use anyhow::{bail, Context, Result};
-use contactlab::outer::{run, OuterSettings, Pruning, RunStatus};
-use contactlab::output::loglog::{loglog_slope, loglog_svg, Series};
-use contactlab::output::write_atomic;
-use contactlab::scene::balloons::{self, BalloonsParams};
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::collections::BTreeMap;
 use std::io::Write;

@@ -64,15 +64,15 @@
 //! errors.
 
 use crate::contact::min_distance;
+use crate::contact::ClosestPair;
 use crate::energy::{
     Gas3dEnergy, GasEnergy, Gravity, Gravity3d, Membrane3dEnergy, MembraneEnergy, NeoHookean2d,
     NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
 };
-use crate::mesh::{Body, BodyKind, ContactFilter, Mesh};
-use crate::meshio::{read_mesh_file, MeshData, MeshReadError};
-use crate::outer::Pruning;
-use crate::pairs::ClosestPair;
+use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
+use crate::scene::meshio::{read_mesh_file, MeshData, MeshReadError};
 use crate::scene::Scene;
+use crate::solve::outer::Pruning;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -223,7 +223,7 @@ pub struct SceneFile {
 impl SceneFile {
     /// The scene for `contactlab run FILE --dynamic`: lumped masses from each body's
     /// `density`, the initial velocity of the bodies' `velocity` keys, Δt and steps from
-    /// `[dynamics]` (0 when absent: [`crate::dynamics::DynamicSettings::validate`] refuses
+    /// `[dynamics]` (0 when absent: [`crate::solve::dynamics::DynamicSettings::validate`] refuses
     /// them unless the command line gives them). A body with a free vertex needs a
     /// `density > 0` (a massless free vertex has no dynamics); a body whose vertices are all
     /// fixed may omit it (taken as 0).
@@ -486,7 +486,7 @@ impl Ctx<'_> {
                     return Err(self.invalid(line, "dynamics.steps", 0, "must be ≥ 1"));
                 }
                 if let Some(sc) = &d.scheme {
-                    if crate::dynamics::Scheme::from_name(sc).is_none() {
+                    if crate::solve::dynamics::Scheme::from_name(sc).is_none() {
                         return Err(self.invalid(
                             line,
                             "dynamics.scheme",
@@ -569,7 +569,7 @@ impl Ctx<'_> {
             }
         }
         if let Some(a) = &s.accuracy {
-            if crate::presets::Accuracy::from_name(a).is_none() {
+            if crate::solve::settings::Accuracy::from_name(a).is_none() {
                 return Err(self.invalid(
                     line,
                     "solver.accuracy",

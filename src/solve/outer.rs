@@ -4,16 +4,16 @@
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an observer
 //! callback, which writes CSV, frames or a progress line.
 
-use crate::broad_phase::point_edge_near;
+use crate::contact::broad_phase::point_edge_near;
+use crate::contact::MinDistance;
 use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
     PairRows,
 };
 use crate::energy::TotalEnergy;
-use crate::mesh::Mesh;
-use crate::pairs::MinDistance;
-use crate::subproblem::row_offsets;
-use crate::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
+use crate::scene::mesh::Mesh;
+use crate::solve::subproblem::row_offsets;
+use crate::solve::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};

@@ -24,7 +24,7 @@
 
 use crate::contact::{ContactPair, PairRows};
 use crate::energy::TotalEnergy;
-use crate::mesh::Mesh;
+use crate::scene::mesh::Mesh;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
 use std::time::Instant;

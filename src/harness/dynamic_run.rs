@@ -14,16 +14,18 @@
 //!   gravity);
 //! - `summary.json` (the settings and [`DynamicMetrics`]).
 
-use crate::case::{self, CaseSettings, DynamicMetrics, DYNAMIC_SCENES};
-use crate::RunArgs;
+use crate::harness::case::{self, CaseSettings, DynamicMetrics};
+use crate::harness::run::RunArgs;
+use crate::output::svg::write_svg;
+use crate::output::timeseries::{timeseries_svg, Line};
+use crate::output::vtk::{write_vtu, PvdSeries};
+use crate::output::write_atomic;
+use crate::scene::dynamic::DynamicScene;
+use crate::scene::registry;
+use crate::scene::registry::DYNAMIC_SCENES;
+use crate::solve::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
+use crate::solve::outer::OuterSettings;
 use anyhow::{bail, Context, Result};
-use contactlab::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
-use contactlab::outer::OuterSettings;
-use contactlab::output::svg::write_svg;
-use contactlab::output::timeseries::{timeseries_svg, Line};
-use contactlab::output::vtk::{write_vtu, PvdSeries};
-use contactlab::output::write_atomic;
-use contactlab::scene::dynamic::DynamicScene;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -73,7 +75,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         bail!("--perturb and --heights set the balloons' static start; they are not available with --dynamic");
     }
     let scheme = parse_scheme(a.scheme.as_deref().unwrap_or("euler"))?;
-    let mut params = case::parse_params(&a.params)?;
+    let mut params = registry::parse_params(&a.params)?;
     if let Some(mu) = a.mu {
         params.insert("mu".into(), mu);
     }
@@ -86,7 +88,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
         }
         params.insert("c".into(), c);
     }
-    let (ds, params_json) = case::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
+    let (ds, params_json) = registry::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
     let is_dynamic_scene = DYNAMIC_SCENES.contains(&a.scene.as_str());
     let dt = a.dt.unwrap_or(ds.dt);
     let steps = a.steps.unwrap_or(ds.steps);
@@ -115,7 +117,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
 /// them, and Δt and the number of steps must come from one or the other.
 pub fn run_dynamic_file(
     a: &RunArgs,
-    file: contactlab::scenefile::SceneFile,
+    file: crate::scene::file::SceneFile,
     params_json: serde_json::Value,
 ) -> Result<()> {
     let spec = file.dynamics.clone();
@@ -201,7 +203,7 @@ fn run_prepared(
     let every = a.frame_every.max(1);
     let mut observer = |rec: &StepRecord,
                         forces: &[PairForce],
-                        st: &contactlab::dynamics::DynamicState| {
+                        st: &crate::solve::dynamics::DynamicState| {
         records.push(rec.clone());
         let mut step = || -> Result<()> {
             hist.serialize(rec)?;
@@ -374,7 +376,7 @@ fn run_prepared(
         );
     }
     if metrics.status != "completed" {
-        return Err(crate::RunFinished {
+        return Err(crate::harness::run::RunFinished {
             status: metrics.status.to_string(),
         }
         .into());

@@ -1,4 +1,5 @@
-//! Rows of T(ψ) in 2D, eq. (4): for every `point_edge` pair (x, a), x ∉ a,
+//! `point_edge` pairs in 2D: vertex `x`, contact edge `a`, `x ∉ a`. Their enumeration (the
+//! paper-faithful all-pairs mode of §4.1.1) and their rows of T(ψ), eq. (4):
 //!
 //! ```text
 //!     n_{a,x}(ψ) · (φ(a_i) − φ(x)) ≥ ε,   i = 0, 1,
@@ -6,13 +7,51 @@
 //!
 //! with `n_{a,x}(ψ)` the unit vector from ψ(x) to the closest point of ψ(a) (eq. 5). Both rows
 //! are linear in φ, so T(ψ) is a convex polyhedron; it contains ψ when ψ is admissible, and by
-//! Lemma 4.2 it lies inside A_{h,ε}.
+//! Lemma 4.2 it lies inside A_{h,ε}. The only pairs left out of the rows are those whose three
+//! vertices are all fixed: their rows are constant, so they are checked once at the start
+//! ([`super::admissibility::fixed_pairs_admissible`]) and never again.
 
-use crate::geometry::point_edge_distance;
-use crate::mesh::Mesh;
-use crate::pairs::PointEdgePair;
+use super::distance::point_edge_distance;
+use crate::scene::mesh::Mesh;
 use nalgebra::Vector2;
 use rayon::prelude::*;
+
+/// A vertex–edge pair: vertex `x`, contact edge index `a` (into [`Mesh::edges`]), `x ∉ a`.
+/// Ordered by vertex, then edge (the order of the broad phase's output).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PointEdgePair {
+    /// Vertex.
+    pub x: usize,
+    /// Edge index.
+    pub a: usize,
+}
+
+/// All `point_edge` pairs of the mesh that the contact filter ([`Mesh::contact_filter`])
+/// allows, split into those with at least one free vertex (they
+/// get rows) and those whose vertices are all fixed (checked once).
+pub fn point_edge_pairs(mesh: &Mesh) -> (Vec<PointEdgePair>, Vec<PointEdgePair>) {
+    let verts = mesh.contact_vertices();
+    let filter = mesh.filter();
+    let mut movable = Vec::new();
+    let mut fixed = Vec::new();
+    for (a, e) in mesh.edges.iter().enumerate() {
+        for &x in &verts {
+            if x == e[0] || x == e[1] {
+                continue;
+            }
+            if filter.is_some_and(|f| !f.vertex_edge(x, a)) {
+                continue;
+            }
+            let pair = PointEdgePair { x, a };
+            if mesh.fixed[x] && mesh.fixed[e[0]] && mesh.fixed[e[1]] {
+                fixed.push(pair);
+            } else {
+                movable.push(pair);
+            }
+        }
+    }
+    (movable, fixed)
+}
 
 /// The two rows of one `point_edge` pair, frozen at ψ.
 #[derive(Clone, Copy, Debug, PartialEq)]

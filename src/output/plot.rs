@@ -6,9 +6,9 @@
 //! rows with `status = converged` are plotted unless `--all-statuses` is given; rows whose x or
 //! y is empty or not positive are skipped (log axes) and counted on stderr.
 
+use crate::output::loglog::{loglog_slope, loglog_svg, Series};
+use crate::output::write_atomic;
 use anyhow::{bail, Context, Result};
-use contactlab::output::loglog::{loglog_slope, loglog_svg, Series};
-use contactlab::output::write_atomic;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 

@@ -2,7 +2,7 @@
 //! over the axis-aligned boxes of the contact edges. Two structures with one contract (register
 //! boxes by index; a query returns the overlapping items sorted, without repetition) exist in any
 //! dimension: a uniform grid built by sorting cell keys ([`AabbGrid`]) and a bounding volume
-//! hierarchy ([`crate::bvh::Bvh`]). The pair search uses the BVH ([`edge_index`]): on the
+//! hierarchy ([`crate::contact::bvh::Bvh`]). The pair search uses the BVH ([`edge_index`]): on the
 //! balloons scene the bench `broad_phase/structure` (build plus one query per vertex) measured
 //! them equal at 10³ and 10⁴ elements per membrane and the BVH 1.4× faster at 10⁵ (README,
 //! "Broad phase"). The grid stays for comparison and for scenes where it may win.
@@ -19,13 +19,17 @@
 //! on the quasi-uniform meshes of the scenes. With either structure the output order (vertex,
 //! then edge index) does not depend on the number of rayon threads.
 //!
-//! The same names run through the layers: `point_edge` pairs here, in [`crate::pairs`], in the
-//! rows of T(ψ) ([`crate::rows`]) and in the diagnostics.
+//! The same names run through the layers: `point_edge` pairs here, in [`crate::contact`], in the
+//! rows of T(ψ) ([`crate::contact`]) and in the diagnostics.
 
-use crate::bvh::Bvh;
-use crate::geometry::{edge_edge_distance_2d, point_edge_distance};
-use crate::mesh::Mesh;
-use crate::pairs::{ClosestPair, MinDistance, PointEdgePair};
+use super::admissibility::{segment_meets_triangle, Closest3};
+use super::p3;
+use crate::contact::bvh::Bvh;
+use crate::contact::distance::{
+    edge_edge_distance, edge_edge_distance_2d, point_edge_distance, point_triangle_distance,
+};
+use crate::contact::{ClosestPair, MinDistance, PointEdgePair};
+use crate::scene::mesh::{ContactFilter, Mesh};
 use rayon::prelude::*;
 
 /// A `point_edge` pair found by the broad phase, with its exact distance at the queried state.
@@ -336,7 +340,7 @@ pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize
 /// phase: the `point_edge` pairs within a radius `r` (starting at `r0`, multiplied by 4 until
 /// some pair is found, so the minimum found is the global one) and the crossing test. With
 /// `skip_fixed`, pairs whose vertices are all fixed are not checked (they were checked once at
-/// the start). The same value as [`crate::pairs::check_admissible`] over the same pairs.
+/// the start). The same value as [`crate::contact::check_admissible`] over the same pairs.
 pub fn min_distance_near(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDistance {
     let mut best = MinDistance {
         distance: f64::INFINITY,
@@ -384,8 +388,8 @@ pub fn min_distance_near(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> M
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Body, BodyKind};
-    use crate::pairs::{check_admissible, point_edge_pairs};
+    use crate::contact::{check_admissible, point_edge_pairs};
+    use crate::scene::mesh::{Body, BodyKind};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -572,5 +576,176 @@ mod tests {
         let mut y = x.clone();
         y[7] = 2.0; // vertex 3 moved to (1, 2): edge [2, 3] parallel to edge [0, 1]
         assert_eq!(first_crossing(&mesh, &y, false), None);
+    }
+}
+
+/// Disjoint element pairs closer than a radius, found through the BVH of
+/// [`crate::contact::bvh::Bvh`]: the 3D broad phase. Sorted, so the result does not depend on the
+/// thread count.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NearPairs3 {
+    /// `(vertex, triangle index, distance)`, sorted by vertex then triangle.
+    pub vertex_triangle: Vec<(usize, usize, f64)>,
+    /// `(edge a, edge b, distance)` with `a < b`, sorted.
+    pub edge_edge: Vec<(usize, usize, f64)>,
+}
+
+fn bbox(x: &[f64], vs: &[usize], r: f64) -> crate::contact::broad_phase::Aabb<3> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &v in vs {
+        for c in 0..3 {
+            lo[c] = lo[c].min(x[3 * v + c] - r);
+            hi[c] = hi[c].max(x[3 * v + c] + r);
+        }
+    }
+    (lo, hi)
+}
+
+/// Every disjoint vertex–triangle pair (`vertices` × `triangles`, x ∉ T) and edge–edge pair
+/// (a ∩ b = ∅) at distance `< r`, through a BVH over the triangles' and the edges' boxes.
+pub fn near_pairs_3d(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r: f64,
+) -> NearPairs3 {
+    near_pairs_3d_filtered(x, vertices, edges, triangles, r, None)
+}
+
+/// [`near_pairs_3d`] over the pairs a contact filter allows (`None`: all pairs). An excluded
+/// pair is dropped before its distance is computed.
+pub fn near_pairs_3d_filtered(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r: f64,
+    filter: Option<&ContactFilter>,
+) -> NearPairs3 {
+    use crate::contact::bvh::Bvh;
+    let mut out = NearPairs3::default();
+    let mut hits = Vec::new();
+    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
+    let tb = Bvh::<3>::build(&tbox);
+    for &v in vertices {
+        let (lo, hi) = bbox(x, &[v], r);
+        hits.clear();
+        tb.query(&lo, &hi, &mut hits);
+        for &ti in &hits {
+            let t = triangles[ti as usize];
+            if t.contains(&v) || filter.is_some_and(|f| !f.vertex_face(v, ti as usize)) {
+                continue;
+            }
+            let d = point_triangle_distance(&p3(x, v), &p3(x, t[0]), &p3(x, t[1]), &p3(x, t[2]))
+                .distance;
+            if d < r {
+                out.vertex_triangle.push((v, ti as usize, d));
+            }
+        }
+    }
+    let ebox: Vec<_> = edges.iter().map(|e| bbox(x, e, 0.0)).collect();
+    let eb = Bvh::<3>::build(&ebox);
+    for (ai, a) in edges.iter().enumerate() {
+        let (lo, hi) = bbox(x, a, r);
+        hits.clear();
+        eb.query(&lo, &hi, &mut hits);
+        for &bi in &hits {
+            let bi = bi as usize;
+            let b = edges[bi];
+            if bi <= ai
+                || a.iter().any(|v| b.contains(v))
+                || filter.is_some_and(|f| !f.edge_edge(ai, bi))
+            {
+                continue;
+            }
+            let d =
+                edge_edge_distance(&p3(x, a[0]), &p3(x, a[1]), &p3(x, b[0]), &p3(x, b[1])).distance;
+            if d < r {
+                out.edge_edge.push((ai, bi, d));
+            }
+        }
+    }
+    out.vertex_triangle.sort_by_key(|p| (p.0, p.1));
+    out.edge_edge.sort_by_key(|p| (p.0, p.1));
+    out
+}
+
+/// [`min_distance_3d`] through the BVH: edges through triangles among overlapping boxes, then
+/// the near pairs within a radius that starts at `r0` (> 0) and grows ×4 until a pair is found.
+/// Gives the same distance as the O(N²) form (tested).
+pub fn min_distance_3d_bvh(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r0: f64,
+) -> (f64, Closest3) {
+    min_distance_3d_bvh_filtered(x, vertices, edges, triangles, r0, None)
+}
+
+/// [`min_distance_3d_bvh`] over the pairs a contact filter allows (`None`: all pairs).
+pub fn min_distance_3d_bvh_filtered(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r0: f64,
+    filter: Option<&ContactFilter>,
+) -> (f64, Closest3) {
+    use crate::contact::bvh::Bvh;
+    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
+    let tb = Bvh::<3>::build(&tbox);
+    let mut hits = Vec::new();
+    for (ai, e) in edges.iter().enumerate() {
+        let (lo, hi) = bbox(x, e, 0.0);
+        hits.clear();
+        tb.query(&lo, &hi, &mut hits);
+        for &ti in &hits {
+            let t = triangles[ti as usize];
+            if e.iter().any(|v| t.contains(v))
+                || filter.is_some_and(|f| !f.edge_face(ai, ti as usize))
+            {
+                continue;
+            }
+            if segment_meets_triangle(
+                &p3(x, e[0]),
+                &p3(x, e[1]),
+                &p3(x, t[0]),
+                &p3(x, t[1]),
+                &p3(x, t[2]),
+            ) {
+                return (
+                    0.0,
+                    Closest3::EdgeThroughTriangle {
+                        a: ai,
+                        t: ti as usize,
+                    },
+                );
+            }
+        }
+    }
+    // the diameter of the configuration bounds every distance
+    let all: Vec<usize> = (0..x.len() / 3).collect();
+    let (lo, hi) = bbox(x, &all, 0.0);
+    let diam = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    let mut r = r0.max(f64::MIN_POSITIVE);
+    loop {
+        let near = near_pairs_3d_filtered(x, vertices, edges, triangles, r, filter);
+        let mut best = (f64::INFINITY, Closest3::None);
+        for &(v, t, d) in &near.vertex_triangle {
+            if d < best.0 {
+                best = (d, Closest3::VertexTriangle { x: v, t });
+            }
+        }
+        for &(a, b, d) in &near.edge_edge {
+            if d < best.0 {
+                best = (d, Closest3::EdgeEdge { a, b });
+            }
+        }
+        if best.0.is_finite() || r > 2.0 * diam + 1.0 {
+            return best;
+        }
+        r *= 4.0;
     }
 }

@@ -5,12 +5,13 @@
 //! objective) and `run.json` (scene, settings, final status). An external QP solver can then be
 //! run on contact QPs; `contactlab_solvers::qps::read_qps_file` reads them back.
 
-use crate::case::{build_scene, execute_with, f, parse_params, CaseSettings};
+use crate::harness::capture::Capture;
+use crate::harness::case::{execute_with, f, CaseSettings};
+use crate::output::write_atomic;
+use crate::scene::registry::{build_scene, parse_params};
+use crate::solve::outer::Pruning;
+use crate::solve::settings::Accuracy;
 use anyhow::{bail, Context, Result};
-use contactlab::capture::Capture;
-use contactlab::outer::Pruning;
-use contactlab::output::write_atomic;
-use contactlab::presets::Accuracy;
 use contactlab_solvers::qps::write_qps_file;
 use contactlab_solvers::{backend_from_name, Qp, QpError, QpSolution};
 use std::io::Write;

@@ -12,16 +12,36 @@
 //!
 //! Each row also carries the barycentric weight of its vertex pair in the closest points
 //! (`α_i`, `β_i`, `(1 − s, s)_i·(1 − t, t)_j`); the weights sum to 1 and give the contact
-//! force of Lemma 5.6 in [`crate::diagnostics`].
+//! force of Lemma 5.6 in [`crate::harness::diagnostics`].
 //!
-//! The 2D rows are built exactly as [`crate::rows::point_edge_row`] (same floating-point
+//! The 2D rows are built exactly as [`crate::contact::point_edge_row`] (same floating-point
 //! operations), so 2D results do not depend on which interface built them.
 
-use crate::broad_phase::{min_distance_near, point_edge_near};
-use crate::geometry::{point_edge_distance, point_triangle_distance, segment_segment_distance};
-use crate::mesh::Mesh;
-use crate::pairs::{point_edge_pairs, ClosestPair, MinDistance, PointEdgePair};
-use crate::rows3d::{min_distance_3d_bvh_filtered, near_pairs_3d_filtered, p3, Closest3};
+pub mod admissibility;
+pub mod broad_phase;
+pub mod bvh;
+pub mod distance;
+pub mod edge_edge;
+pub mod point_edge;
+pub mod point_triangle;
+
+pub use admissibility::{
+    check_admissible, fixed_pairs_admissible, min_distance_3d, min_distance_3d_filtered,
+    min_distance_of_pairs, segment_meets_triangle, Closest3, ClosestPair, MinDistance,
+};
+pub use broad_phase::{
+    min_distance_3d_bvh, min_distance_3d_bvh_filtered, near_pairs_3d, near_pairs_3d_filtered,
+    NearPairs3,
+};
+pub use edge_edge::edge_edge_rows;
+pub use point_edge::{
+    min_slack, point_edge_pairs, point_edge_row, point_edge_rows, PointEdgePair, PointEdgeRow,
+};
+pub use point_triangle::vertex_triangle_rows;
+
+use self::broad_phase::{min_distance_near, point_edge_near};
+use self::distance::{edge_edge_distance, point_edge_distance, point_triangle_distance};
+use crate::scene::mesh::Mesh;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
@@ -167,7 +187,7 @@ pub fn pair_rows(mesh: &Mesh, psi: &[f64], pair: ContactPair) -> Option<PairRows
         }
         ContactPair::EdgeEdge { a, b } => {
             let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
-            let q = segment_segment_distance(
+            let q = edge_edge_distance(
                 &p3(psi, ea[0]),
                 &p3(psi, ea[1]),
                 &p3(psi, eb[0]),
@@ -337,11 +357,69 @@ pub fn displacements(dim: usize, x: &[f64], y: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// One row `n · (φ(plus) − φ(minus)) ≥ ε`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row3 {
+    /// Unit normal, frozen at ψ.
+    pub n: Vector3<f64>,
+    /// The vertex on the far side (a triangle's or edge b's vertex).
+    pub plus: usize,
+    /// The vertex on the near side (the vertex x, or edge a's vertex).
+    pub minus: usize,
+}
+
+impl Row3 {
+    /// `n · (φ(plus) − φ(minus))`.
+    #[inline]
+    pub fn value(&self, phi: &[f64]) -> f64 {
+        (p3(phi, self.plus) - p3(phi, self.minus)).dot(&self.n)
+    }
+}
+
+/// Position of vertex `v` in a flat 3D array.
+#[inline]
+pub fn p3(x: &[f64], v: usize) -> Vector3<f64> {
+    Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])
+}
+
+/// All rows of T(ψ) for the given elements (every disjoint vertex–triangle pair and every
+/// disjoint edge–edge pair, all pairs); `None` when some pair is at distance 0. With
+/// `edge_edge = false`, the vertex–triangle rows only (the master/slave simplification of
+/// Remark 4.3, kept to show what it misses).
+pub fn all_rows_3d(
+    psi: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    edge_edge: bool,
+) -> Option<Vec<Row3>> {
+    let mut rows = Vec::new();
+    for t in triangles {
+        for &v in vertices {
+            if t.contains(&v) {
+                continue;
+            }
+            rows.extend_from_slice(&vertex_triangle_rows(psi, v, *t)?.0);
+        }
+    }
+    if edge_edge {
+        for (ai, a) in edges.iter().enumerate() {
+            for b in edges.iter().skip(ai + 1) {
+                if a.iter().any(|v| b.contains(v)) {
+                    continue;
+                }
+                rows.extend_from_slice(&edge_edge_rows(psi, *a, *b)?.0);
+            }
+        }
+    }
+    Some(rows)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Body, BodyKind};
-    use crate::rows::point_edge_row;
+    use crate::contact::point_edge_row;
+    use crate::scene::mesh::{Body, BodyKind};
 
     fn two_sheets() -> (Mesh, Vec<f64>) {
         // two triangles stacked at heights 0 and 0.5, the upper one rotated

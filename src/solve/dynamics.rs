@@ -1,5 +1,5 @@
 //! The dynamic case (Pantz 2008, §6; SPEC §5): every time step is a problem (3), solved by
-//! the same outer loop ([`crate::outer::run`]) with the same backends and pruning.
+//! the same outer loop ([`crate::solve::outer::run`]) with the same backends and pruning.
 //!
 //! # The step problem
 //!
@@ -51,8 +51,8 @@
 
 use crate::contact::{ContactPair, PairRows};
 use crate::energy::{Energy, Hessian, TotalEnergy};
-use crate::mesh::{BodyKind, Mesh};
-use crate::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
+use crate::scene::mesh::{BodyKind, Mesh};
+use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::QpBackend;
 use std::time::Instant;
 use thiserror::Error;
@@ -716,7 +716,7 @@ pub fn rest_force(records: &[StepRecord], fraction: f64) -> Option<RestForce> {
 mod tests {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
-    use crate::mesh::Body;
+    use crate::scene::mesh::Body;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

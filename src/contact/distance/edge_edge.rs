@@ -1,3 +1,8 @@
+//! `edge_edge` distance: two segments `[a0, a1]` and `[b0, b1]`, in space (eq. 6's edge–edge
+//! pairs) and in the plane (the edge crossings of the 2D exact check).
+//!
+//! # In space
+//!
 //! Segment–segment distance in space (Ericson, *Real-Time Collision Detection*, §5.1.9), with
 //! a deterministic choice of the closest pair when the segments are parallel.
 //!
@@ -40,8 +45,8 @@
 //!
 //! **Symmetry.** The two segments are put in a canonical order first (lexicographic order of
 //! the coordinates `(a0, a1)` vs `(b0, b1)` under `f64::total_cmp`) and the result is swapped
-//! back, so `segment_segment_distance(b0, b1, a0, a1)` is bit-for-bit the swap of
-//! `segment_segment_distance(a0, a1, b0, b1)`: same `distance`, `s ↔ t`, `pa ↔ pb`.
+//! back, so `edge_edge_distance(b0, b1, a0, a1)` is bit-for-bit the swap of
+//! `edge_edge_distance(a0, a1, b0, b1)`: same `distance`, `s ↔ t`, `pa ↔ pb`.
 //!
 //! **Zero-length segments** (`|d|² = 0`): a point. Point–segment: the clamped projection of the
 //! point (its parameter is `0`); point–point: `s = t = 0`, `pa = a0`, `pb = b0`.
@@ -49,13 +54,31 @@
 //! **Non-finite input.** `s` and `t` are always in `[0, 1]` (a NaN parameter is clamped to
 //! `0`), but `distance`, `pa` and `pb` are NaN or infinite when a coordinate is (or when the
 //! squared lengths overflow, `|x| ≳ 1e150`). Finite input never gives NaN.
+//!
+//! # In the plane
+//!
+//! Edge–edge (segment–segment) distance in the plane.
+//!
+//! Two segments `[a0, a1]` and `[b0, b1]` in ℝ² either intersect (distance `0`: proper
+//! crossing, touching at an endpoint, or collinear overlap) or not; in the latter case the
+//! minimum of `|p − q|` over the two segments is attained at an endpoint of one of them, so
+//!
+//! ```text
+//! d = min( d(a0, [b0,b1]), d(a1, [b0,b1]), d(b0, [a0,a1]), d(b1, [a0,a1]) ).
+//! ```
+//!
+//! A proper crossing is detected with the orientation signs
+//! `o(p, q, r) = (q − p) × (r − p)`: the segments cross when `o(a0,a1,b0)·o(a0,a1,b1) < 0`
+//! and `o(b0,b1,a0)·o(b0,b1,a1) < 0`. Touching and collinear overlaps give a zero
+//! point–edge distance through [`point_edge_distance`].
 
-use nalgebra::Vector3;
+use super::point_edge::point_edge_distance;
+use nalgebra::{Vector2, Vector3};
 use std::cmp::Ordering;
 
 /// Result of a segment–segment query. `distance` is NOT squared.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SegmentSegment {
+pub struct EdgeEdge {
     /// Euclidean distance between the two closed segments, not squared; equal to `|pb − pa|`.
     pub distance: f64,
     /// Parameter of the closest point on `[a0, a1]`, in `[0, 1]`.
@@ -110,15 +133,15 @@ fn canonical_order(
 /// midpoint rule for parallel segments, and what degenerate and non-finite inputs return.
 /// Never NaN for finite input (short of overflow, `|x| ≳ 1e150`); symmetric bit for bit under
 /// swapping the two segments.
-pub fn segment_segment_distance(
+pub fn edge_edge_distance(
     a0: &Vector3<f64>,
     a1: &Vector3<f64>,
     b0: &Vector3<f64>,
     b1: &Vector3<f64>,
-) -> SegmentSegment {
+) -> EdgeEdge {
     if canonical_order(a0, a1, b0, b1) == Ordering::Greater {
         let r = solve(b0, b1, a0, a1);
-        SegmentSegment {
+        EdgeEdge {
             distance: r.distance,
             s: r.t,
             t: r.s,
@@ -131,12 +154,7 @@ pub fn segment_segment_distance(
 }
 
 /// The kernel proper, for segments already in canonical order.
-fn solve(
-    a0: &Vector3<f64>,
-    a1: &Vector3<f64>,
-    b0: &Vector3<f64>,
-    b1: &Vector3<f64>,
-) -> SegmentSegment {
+fn solve(a0: &Vector3<f64>, a1: &Vector3<f64>, b0: &Vector3<f64>, b1: &Vector3<f64>) -> EdgeEdge {
     let d1 = a1 - a0;
     let d2 = b1 - b0;
     let la = d1.norm_squared();
@@ -144,7 +162,7 @@ fn solve(
     let pair = |s: f64, t: f64| {
         let pa = lerp(a0, a1, s);
         let pb = lerp(b0, b1, t);
-        SegmentSegment {
+        EdgeEdge {
             distance: (pb - pa).norm(),
             s,
             t,
@@ -168,7 +186,7 @@ fn solve(
     }
     let n = d1.cross(&d2);
     let n2 = n.norm_squared();
-    let mut best: Option<SegmentSegment> = None;
+    let mut best: Option<EdgeEdge> = None;
     if n2 <= PARALLEL_SIN * PARALLEL_SIN * la * lb {
         let sig0 = (b0 - a0).dot(&d1) / la;
         let sig1 = (b1 - a0).dot(&d1) / la;
@@ -243,8 +261,8 @@ mod tests {
         a1: &Vector3<f64>,
         b0: &Vector3<f64>,
         b1: &Vector3<f64>,
-    ) -> SegmentSegment {
-        let r = segment_segment_distance(a0, a1, b0, b1);
+    ) -> EdgeEdge {
+        let r = edge_edge_distance(a0, a1, b0, b1);
         assert!(
             r.distance.is_finite() && r.s.is_finite() && r.t.is_finite(),
             "{r:?}"
@@ -258,11 +276,11 @@ mod tests {
         assert_eq!(r.pb, lerp(b0, b1, r.t));
         assert_eq!(r.distance, (r.pb - r.pa).norm());
         // symmetry: bit for bit, closest points swapped
-        let w = segment_segment_distance(b0, b1, a0, a1);
+        let w = edge_edge_distance(b0, b1, a0, a1);
         assert_eq!(w.distance, r.distance);
         assert_eq!((w.s, w.t, w.pa, w.pb), (r.t, r.s, r.pb, r.pa));
         // determinism
-        assert_eq!(r, segment_segment_distance(a0, a1, b0, b1));
+        assert_eq!(r, edge_edge_distance(a0, a1, b0, b1));
         // reversing a segment: same distance (to rounding)
         let tol = 1e-14
             * (1.0
@@ -270,19 +288,14 @@ mod tests {
                     .iter()
                     .map(|x| x.norm())
                     .fold(0.0, f64::max));
-        let x = segment_segment_distance(a1, a0, b0, b1);
+        let x = edge_edge_distance(a1, a0, b0, b1);
         assert!((x.distance - r.distance).abs() <= tol, "{x:?} vs {r:?}");
-        let x = segment_segment_distance(a0, a1, b1, b0);
+        let x = edge_edge_distance(a0, a1, b1, b0);
         assert!((x.distance - r.distance).abs() <= tol, "{x:?} vs {r:?}");
         r
     }
 
-    fn check(
-        a0: Vector3<f64>,
-        a1: Vector3<f64>,
-        b0: Vector3<f64>,
-        b1: Vector3<f64>,
-    ) -> SegmentSegment {
+    fn check(a0: Vector3<f64>, a1: Vector3<f64>, b0: Vector3<f64>, b1: Vector3<f64>) -> EdgeEdge {
         let r = check_invariants(&a0, &a1, &b0, &b1);
         let m = brute(&a0, &a1, &b0, &b1);
         let len = (a1 - a0).norm().max((b1 - b0).norm());
@@ -449,7 +462,7 @@ mod tests {
         // determinism: repeated calls give identical results
         for _ in 0..3 {
             assert_eq!(
-                segment_segment_distance(&a0, &a1, &b0, &b1),
+                edge_edge_distance(&a0, &a1, &b0, &b1),
                 check_invariants(&a0, &a1, &b0, &b1)
             );
         }
@@ -685,11 +698,133 @@ mod tests {
             (a0, inf, a0, a1),
             (a0, a1, inf, a0),
         ] {
-            let r = segment_segment_distance(&p0, &p1, &q0, &q1);
+            let r = edge_edge_distance(&p0, &p1, &q0, &q1);
             assert!(
                 (0.0..=1.0).contains(&r.s) && (0.0..=1.0).contains(&r.t),
                 "{r:?}"
             );
+        }
+    }
+}
+
+fn orient(p: &Vector2<f64>, q: &Vector2<f64>, r: &Vector2<f64>) -> f64 {
+    let u = q - p;
+    let v = r - p;
+    u.x * v.y - u.y * v.x
+}
+
+/// Exact (up to rounding) distance between the segments `[a0, a1]` and `[b0, b1]`; `0` when
+/// they intersect (crossing, touching or collinear overlap).
+pub fn edge_edge_distance_2d(
+    a0: &Vector2<f64>,
+    a1: &Vector2<f64>,
+    b0: &Vector2<f64>,
+    b1: &Vector2<f64>,
+) -> f64 {
+    let o1 = orient(a0, a1, b0);
+    let o2 = orient(a0, a1, b1);
+    let o3 = orient(b0, b1, a0);
+    let o4 = orient(b0, b1, a1);
+    let opposite = |u: f64, v: f64| (u < 0.0 && v > 0.0) || (u > 0.0 && v < 0.0);
+    if opposite(o1, o2) && opposite(o3, o4) {
+        return 0.0;
+    }
+    point_edge_distance(a0, b0, b1)
+        .distance
+        .min(point_edge_distance(a1, b0, b1).distance)
+        .min(point_edge_distance(b0, a0, a1).distance)
+        .min(point_edge_distance(b1, a0, a1).distance)
+}
+
+#[cfg(test)]
+mod tests_2d {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Brute force: for each sample of one segment, the exact point–segment distance to the
+    /// other (the inner minimum is convex, so sampling only one segment suffices); both ways.
+    fn brute(a0: &Vector2<f64>, a1: &Vector2<f64>, b0: &Vector2<f64>, b1: &Vector2<f64>) -> f64 {
+        let n = 10_000;
+        let mut m = f64::INFINITY;
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let p = a0 * (1.0 - t) + a1 * t;
+            m = m.min(point_edge_distance(&p, b0, b1).distance);
+            let q = b0 * (1.0 - t) + b1 * t;
+            m = m.min(point_edge_distance(&q, a0, a1).distance);
+        }
+        m
+    }
+
+    fn v(x: f64, y: f64) -> Vector2<f64> {
+        Vector2::new(x, y)
+    }
+
+    #[test]
+    fn geometry_edge_edge_random_vs_sampling() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut crossings = 0;
+        for _ in 0..200 {
+            let mut r = || v(rng.gen_range(-2.0..2.0), rng.gen_range(-2.0..2.0));
+            let (a0, a1, b0, b1) = (r(), r(), r(), r());
+            let d = edge_edge_distance_2d(&a0, &a1, &b0, &b1);
+            let m = brute(&a0, &a1, &b0, &b1);
+            let h = ((a1 - a0).norm() + (b1 - b0).norm()) / 1e4;
+            assert!(d <= m + 1e-12, "{d} > {m}");
+            assert!(d >= m - h - 1e-12, "{d} < {m} - {h}");
+            if d == 0.0 {
+                crossings += 1;
+            }
+            // symmetric in the order of segments and endpoints
+            let d2 = edge_edge_distance_2d(&b1, &b0, &a1, &a0);
+            assert!((d - d2).abs() <= 1e-13);
+        }
+        assert!(crossings > 10, "random set should contain crossings");
+    }
+
+    #[test]
+    fn geometry_edge_edge_special_cases() {
+        // crossing
+        assert_eq!(
+            edge_edge_distance_2d(&v(-1.0, 0.0), &v(1.0, 0.0), &v(0.0, -1.0), &v(0.0, 1.0)),
+            0.0
+        );
+        // parallel, offset
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(2.0, 0.0), &v(0.5, 0.5), &v(3.0, 0.5));
+        assert_eq!(d, 0.5);
+        // parallel, no overlap in projection
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(1.0, 0.0), &v(4.0, 4.0), &v(5.0, 4.0));
+        assert!((d - 5.0).abs() < 1e-15);
+        // collinear overlapping
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(2.0, 0.0), &v(1.0, 0.0), &v(3.0, 0.0));
+        assert_eq!(d, 0.0);
+        // collinear, one inside the other
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(4.0, 0.0), &v(1.0, 0.0), &v(3.0, 0.0));
+        assert_eq!(d, 0.0);
+        // collinear, disjoint
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(1.0, 0.0), &v(2.5, 0.0), &v(3.0, 0.0));
+        assert_eq!(d, 1.5);
+        // touching at a shared endpoint
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(1.0, 1.0), &v(1.0, 1.0), &v(2.0, 0.0));
+        assert_eq!(d, 0.0);
+        // T-junction: endpoint of b on the interior of a
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(2.0, 0.0), &v(1.0, 0.0), &v(1.0, 3.0));
+        assert_eq!(d, 0.0);
+        // near-miss T
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(2.0, 0.0), &v(1.0, 0.25), &v(1.0, 3.0));
+        assert_eq!(d, 0.25);
+        // degenerate segments (points)
+        let d = edge_edge_distance_2d(&v(0.0, 0.0), &v(0.0, 0.0), &v(3.0, 4.0), &v(3.0, 4.0));
+        assert_eq!(d, 5.0);
+        for (a0, a1, b0, b1) in [
+            (v(0.0, 0.0), v(2.0, 0.0), v(0.5, 0.5), v(3.0, 0.5)),
+            (v(0.0, 0.0), v(1.0, 1.0), v(1.0, 1.0), v(2.0, 0.0)),
+            (v(0.0, 0.0), v(2.0, 0.0), v(1.0, 0.25), v(1.0, 3.0)),
+        ] {
+            let m = brute(&a0, &a1, &b0, &b1);
+            let d = edge_edge_distance_2d(&a0, &a1, &b0, &b1);
+            assert!(d <= m + 1e-12 && d >= m - 1e-3);
         }
     }
 }

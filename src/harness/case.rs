@@ -1,0 +1,394 @@
+//! One case: a scene built by name from `n`, ε and numeric parameters, run with a backend, an
+//! accuracy preset and a pruning mode, then diagnosed. Shared by `contactlab sweep` (one CSV
+//! row per case) and the tests; `contactlab run` builds its scene the same way.
+
+use crate::harness::diagnostics::{
+    converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
+};
+use crate::scene::dynamic::DynamicScene;
+use crate::scene::Scene;
+use crate::solve::dynamics::{
+    lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, DynamicState, PairForce,
+    StepRecord, System, POTENTIAL_TERMS,
+};
+use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
+use crate::solve::settings::Accuracy;
+use anyhow::Result;
+use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// What a case runs with.
+#[derive(Clone, Debug)]
+pub struct CaseSettings {
+    /// Backend name.
+    pub backend: String,
+    /// Accuracy preset.
+    pub accuracy: Accuracy,
+    /// Pruning mode.
+    pub pruning: Pruning,
+    /// Override of the preset's tol_J.
+    pub tol_j: Option<f64>,
+    /// Maximum outer iterations.
+    pub max_outer: usize,
+    /// Inner (Newton-type) steps per T(ψ) at most (`None`: the default, 50); 1 gives one QP
+    /// per outer step.
+    pub max_inner: Option<usize>,
+    /// Wall-time limit of the run in seconds (`None`: none); a run that reaches it ends with
+    /// status `time_limit` and its last admissible iterate.
+    pub time_limit_s: Option<f64>,
+}
+
+/// A finished case.
+pub struct CaseOutcome {
+    /// The run.
+    pub res: RunResult,
+    /// Every iteration record.
+    pub records: Vec<IterationRecord>,
+    /// Diagnostics of a converged run, with the tolerance of the canonical-dual QP.
+    pub diagnostics: Option<(ConvergedDiagnostics, f64)>,
+    /// The backend settings used.
+    pub qp: QpSettings,
+    /// tol_J used.
+    pub tol_j: f64,
+    /// Inner steps per T(ψ) at most, as used.
+    pub max_inner: usize,
+    /// Seconds in the diagnostics.
+    pub t_diagnostics_s: f64,
+}
+
+/// The canonical-dual QP of the diagnostics is solved by Clarabel at the first of these
+/// tolerances at which it reports `solved` (measured: at n = 20 on the balloons, 1e-12 ended
+/// `numerical_error`).
+pub const DIAG_QP_TOLS: [f64; 3] = [1e-12, 1e-10, 1e-9];
+
+/// Lemma 5.4 / 5.6 diagnostics of a converged run (Clarabel at the first tolerance of
+/// [`DIAG_QP_TOLS`] that solves the canonical-dual QP), and that tolerance.
+pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDiagnostics, f64)> {
+    let mut last = None;
+    for tol in DIAG_QP_TOLS {
+        let st = QpSettings {
+            eps_abs: tol,
+            eps_rel: tol,
+            ..Default::default()
+        };
+        let mut b = backend_from_name("clarabel", &st)?;
+        let d = converged_diagnostics(
+            &scene.mesh,
+            &scene.energy,
+            &res.x,
+            scene.eps,
+            scene.h,
+            &res.last_rows,
+            &res.multipliers,
+            b.as_mut(),
+            &DiagnosticSettings::for_eps(scene.eps),
+        )?;
+        let solved = d.dual_qp_status == "solved";
+        last = Some((d, tol));
+        if solved {
+            break;
+        }
+    }
+    Ok(last.expect("DIAG_QP_TOLS is not empty"))
+}
+
+/// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a converged
+/// run.
+pub fn execute(
+    scene: &Scene,
+    cs: &CaseSettings,
+    observer: &mut dyn FnMut(&IterationRecord, &[f64]),
+) -> Result<CaseOutcome> {
+    let qp = cs.accuracy.qp_settings(&cs.backend);
+    let mut backend = backend_from_name(&cs.backend, &qp)?;
+    execute_with(scene, cs, backend.as_mut(), observer)
+}
+
+/// [`execute`] with a backend built by the caller (e.g. one that records the QPs); `cs.backend`
+/// names it in outputs.
+pub fn execute_with(
+    scene: &Scene,
+    cs: &CaseSettings,
+    backend: &mut dyn QpBackend,
+    observer: &mut dyn FnMut(&IterationRecord, &[f64]),
+) -> Result<CaseOutcome> {
+    let qp = cs.accuracy.qp_settings(&cs.backend);
+    let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
+    let mut settings = OuterSettings {
+        tol_j,
+        max_outer: cs.max_outer,
+        pruning: cs.pruning,
+        ..Default::default()
+    };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
+    settings.time_limit_s = cs.time_limit_s;
+    let mut records = Vec::new();
+    let res = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        backend,
+        &settings,
+        &mut |r, x| {
+            records.push(r.clone());
+            observer(r, x)
+        },
+    )?;
+    let t = Instant::now();
+    let diagnostics = if res.status == RunStatus::Converged {
+        Some(lemma_diagnostics(scene, &res)?)
+    } else {
+        None
+    };
+    Ok(CaseOutcome {
+        res,
+        records,
+        diagnostics,
+        qp,
+        tol_j,
+        max_inner: settings.inner.max_inner,
+        t_diagnostics_s: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// The per-run columns of a sweep row (after the case's own columns), as documented in the
+/// README ("Sweeps").
+pub const RUN_COLUMNS: [&str; 33] = [
+    "dim",
+    "h",
+    "eps",
+    "qp_tol",
+    "tol_j",
+    "max_inner",
+    "status",
+    "outer_iterations",
+    "inner_iterations",
+    "backend_iterations",
+    "final_energy",
+    "min_distance",
+    "all_admissible",
+    "energy_monotone",
+    "residual_hm1",
+    "bound",
+    "ratio",
+    "lambda_norm_h",
+    "c_phi",
+    "max_edges_per_vertex",
+    "stationarity_rel",
+    "pairs",
+    "active_rows",
+    "wall_time_s",
+    "t_pairs_s",
+    "t_assembly_s",
+    "t_solve_s",
+    "t_diagnostics_s",
+    "energy_error",
+    "position_error_h1",
+    "max_violation",
+    "reference_energy",
+    "error",
+];
+
+/// Formats a float for CSV (shortest round-trip form; empty when NaN).
+pub fn f(v: f64) -> String {
+    if v.is_nan() {
+        String::new()
+    } else {
+        format!("{v:?}")
+    }
+}
+
+/// The run columns of a finished case ([`RUN_COLUMNS`]; the error columns empty).
+pub fn row_values(scene: &Scene, o: &CaseOutcome) -> BTreeMap<&'static str, String> {
+    let mut m = BTreeMap::new();
+    let r = &o.res;
+    let sum = |g: fn(&IterationRecord) -> f64| o.records.iter().map(g).sum::<f64>();
+    m.insert("dim", scene.mesh.dim.to_string());
+    m.insert("h", f(scene.h));
+    m.insert("eps", f(scene.eps));
+    m.insert("qp_tol", f(o.qp.eps_abs));
+    m.insert("tol_j", f(o.tol_j));
+    m.insert("max_inner", o.max_inner.to_string());
+    m.insert("status", r.status.as_str().to_string());
+    m.insert("outer_iterations", r.outer_iterations.to_string());
+    m.insert("inner_iterations", r.inner_iterations.to_string());
+    m.insert("backend_iterations", r.backend_iterations.to_string());
+    m.insert("final_energy", f(r.energy));
+    m.insert("min_distance", f(r.min_distance.distance));
+    m.insert(
+        "all_admissible",
+        o.records.iter().all(|x| x.admissible).to_string(),
+    );
+    m.insert(
+        "energy_monotone",
+        o.records
+            .windows(2)
+            .all(|w| w[1].energy <= w[0].energy)
+            .to_string(),
+    );
+    if let Some((d, _)) = &o.diagnostics {
+        m.insert("residual_hm1", f(d.residual_hm1));
+        m.insert("bound", f(d.bound));
+        m.insert("ratio", f(d.ratio));
+        m.insert("lambda_norm_h", f(d.lambda_norm_h));
+        m.insert("c_phi", d.c_phi.to_string());
+        m.insert("max_edges_per_vertex", d.max_edges_per_vertex.to_string());
+        m.insert(
+            "stationarity_rel",
+            f(d.stationarity_canonical / d.gradient_norm.max(f64::MIN_POSITIVE)),
+        );
+        m.insert("active_rows", d.active_rows.to_string());
+    } else if let Some(last) = o.records.last() {
+        m.insert("active_rows", last.active_rows.to_string());
+    }
+    m.insert("pairs", o.records.last().map_or(0, |x| x.pairs).to_string());
+    m.insert("wall_time_s", f(r.wall_time_s));
+    m.insert("t_pairs_s", f(sum(|x| x.t_pairs_s)));
+    m.insert("t_assembly_s", f(sum(|x| x.t_assembly_s)));
+    m.insert("t_solve_s", f(sum(|x| x.t_solve_s)));
+    m.insert("t_diagnostics_s", f(o.t_diagnostics_s));
+    m
+}
+
+/// What a dynamic run measured (summary.json and the dynamic sweep rows).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct DynamicMetrics {
+    /// Steps taken.
+    pub steps_taken: usize,
+    /// `completed`, or the outer-loop status that stopped the run.
+    pub status: String,
+    /// Steps whose outer loop ended `max_outer_iterations` (accepted, not converged).
+    pub steps_max_outer: usize,
+    /// Steps whose outer loop ended `line_search_failed` (accepted).
+    pub steps_line_search_failed: usize,
+    /// Every outer iterate of every step passed the exact admissibility check.
+    pub all_admissible: bool,
+    /// Smallest end-of-step distance.
+    pub min_distance: f64,
+    /// E_0.
+    pub initial_energy: f64,
+    /// E at the end.
+    pub final_energy: f64,
+    /// Kinetic energy at the end.
+    pub final_kinetic: f64,
+    /// `max_n (E_n − E_(n−1))` (negative: E decreased at every step).
+    pub max_energy_increase: f64,
+    /// `(E_end − E_0)/|E_0|`.
+    pub energy_drift: f64,
+    /// `max_n |P_n − P_0|` when the scene has no fixed vertex and no potential (external)
+    /// energy — then momentum is conserved and this is its error; `None` otherwise.
+    pub momentum_error: Option<f64>,
+    /// Total mass of the free vertices.
+    pub free_mass: f64,
+    /// Contact force statistics over the last quarter of the steps.
+    pub rest: Option<crate::solve::dynamics::RestForce>,
+    /// Outer iterations summed over the steps.
+    pub outer_iterations: usize,
+    /// The largest number of outer iterations of one step.
+    pub max_outer_per_step: usize,
+    /// Wall time of the stepping.
+    pub wall_time_s: f64,
+}
+
+/// The fraction of the steps (the last ones) over which [`DynamicMetrics::rest`] is taken.
+pub const REST_FRACTION: f64 = 0.25;
+
+/// Runs `ds` for `dyn_settings` with the case's backend, accuracy and pruning, calling
+/// `observer` per step.
+pub fn execute_dynamic(
+    ds: &mut DynamicScene,
+    cs: &CaseSettings,
+    dyn_settings: &DynamicSettings,
+    qp: &QpSettings,
+    observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
+) -> Result<(DynamicResult, DynamicMetrics)> {
+    let mut backend = backend_from_name(&cs.backend, qp)?;
+    let mut settings = OuterSettings {
+        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+        max_outer: cs.max_outer,
+        pruning: cs.pruning,
+        ..Default::default()
+    };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
+    let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density)?;
+    let mut system = System {
+        mesh: &ds.scene.mesh,
+        energy: &mut ds.scene.energy,
+        eps: ds.scene.eps,
+        mass,
+    };
+    let res = simulate(
+        &mut system,
+        &ds.scene.x0,
+        &ds.v0,
+        backend.as_mut(),
+        &settings,
+        dyn_settings,
+        observer,
+    )?;
+    let free_mass = system.free_mass();
+    let has_potential = system
+        .energy
+        .terms
+        .iter()
+        .any(|t| POTENTIAL_TERMS.contains(&t.name()));
+    let conserves = !has_potential && !ds.scene.mesh.fixed.iter().any(|&f| f);
+    let m = dynamic_metrics(&res, free_mass, conserves);
+    Ok((res, m))
+}
+
+/// [`DynamicMetrics`] of a finished run.
+pub fn dynamic_metrics(res: &DynamicResult, free_mass: f64, conserves: bool) -> DynamicMetrics {
+    let r = &res.records;
+    let (e0, last) = (r[0].total, r.last().expect("step 0 is recorded"));
+    let p0 = [r[0].momentum_x, r[0].momentum_y, r[0].momentum_z];
+    let steps = &r[1..];
+    DynamicMetrics {
+        steps_taken: res.steps,
+        status: res
+            .stopped_by
+            .map_or("completed".to_string(), |s| s.as_str().to_string()),
+        steps_max_outer: steps
+            .iter()
+            .filter(|s| s.status == "max_outer_iterations")
+            .count(),
+        steps_line_search_failed: steps
+            .iter()
+            .filter(|s| s.status == "line_search_failed")
+            .count(),
+        all_admissible: r.iter().all(|s| s.admissible),
+        min_distance: r
+            .iter()
+            .map(|s| s.min_distance)
+            .fold(f64::INFINITY, f64::min),
+        initial_energy: e0,
+        final_energy: last.total,
+        final_kinetic: last.kinetic,
+        max_energy_increase: r
+            .windows(2)
+            .map(|w| w[1].total - w[0].total)
+            .fold(f64::NEG_INFINITY, f64::max),
+        energy_drift: (last.total - e0) / e0.abs().max(f64::MIN_POSITIVE),
+        momentum_error: conserves.then(|| {
+            r.iter()
+                .map(|s| {
+                    ((s.momentum_x - p0[0]).powi(2)
+                        + (s.momentum_y - p0[1]).powi(2)
+                        + (s.momentum_z - p0[2]).powi(2))
+                    .sqrt()
+                })
+                .fold(0.0, f64::max)
+        }),
+        free_mass,
+        rest: rest_force(r, REST_FRACTION),
+        outer_iterations: steps.iter().map(|s| s.outer_iterations).sum(),
+        max_outer_per_step: steps.iter().map(|s| s.outer_iterations).max().unwrap_or(0),
+        wall_time_s: res.wall_time_s,
+    }
+}

@@ -1,0 +1,16 @@
+//! The harness: one run of a scene and its run directory ([`run`], [`dynamic_run`]), a case
+//! (scene × backend × preset × pruning, diagnosed: [`case`]), sweeps of cases ([`sweep`]),
+//! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]) and QP
+//! export ([`export`], [`capture`]).
+//!
+//! Errors here are reports to the user of the command line (`anyhow`), not values a caller
+//! matches on; the numerical library below keeps `thiserror` enums.
+
+pub mod capture;
+pub mod case;
+pub mod diagnostics;
+pub mod dynamic_run;
+pub mod export;
+pub mod run;
+pub mod scaling;
+pub mod sweep;

@@ -1,0 +1,755 @@
+//! `contactlab run SCENE` for a static run: builds the scene (built-in by name, or a scene
+//! file), runs the outer loop with the chosen backend and writes the run directory
+//! (`docs/run-directory.md`). With `--dynamic` it hands over to [`super::dynamic_run`].
+//!
+//! Exit codes of the command line: 0 a run converged (or a command succeeded), 1 a run
+//! finished with a failure status (its directory written, [`RunFinished`]), 2 an error (bad
+//! input, inadmissible start, a violated guarantee), 101 a panic.
+
+use crate::contact::near_pairs;
+use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
+use crate::harness::{case, dynamic_run};
+use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
+use crate::output::vtk::{write_vtu, PvdSeries};
+use crate::output::write_atomic;
+use crate::scene::balloons::{self, classify_state, BalloonsParams};
+use crate::scene::registry;
+use crate::scene::ring::{self, RingParams};
+use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
+use crate::solve::settings::Accuracy;
+use anyhow::{bail, Context, Result};
+use contactlab_solvers::backend_from_name;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args, Clone)]
+#[allow(missing_docs)]
+pub struct RunArgs {
+    /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
+    /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (README,
+    /// "Scene files"), whose `[solver]` settings apply unless the corresponding flag is given.
+    #[arg(default_value = "balloons")]
+    pub scene: String,
+    /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
+    #[arg(long, default_value = "clarabel")]
+    pub backend: String,
+    /// Mesh level: elements per membrane (balloons), edges of the ring (both default 40), or
+    /// the 3D scene's level (default: the scene's own, README "3D").
+    #[arg(long)]
+    pub n: Option<usize>,
+    /// A scene parameter NAME=VALUE (ring: p, aspect, half_span; the 3D scenes: README
+    /// "3D"); repeatable.
+    #[arg(long = "param")]
+    pub params: Vec<String>,
+    /// Gas constant C (balloons: default 50; balloons3d: default 30).
+    #[arg(long)]
+    pub c: Option<f64>,
+    /// Elasticity coefficient μ (default 1).
+    #[arg(long)]
+    pub mu: Option<f64>,
+    /// ε (default h/10).
+    #[arg(long)]
+    pub eps: Option<f64>,
+    /// Relative perturbation of one C_i, as BALLOON:VALUE (e.g. 0:1e-3); repeatable.
+    #[arg(long = "perturb", value_parser = parse_perturb)]
+    pub perturb: Vec<(usize, f64)>,
+    /// Initial heights of the four balloons, comma-separated (e.g. 0.9,0.2,0.9,0.2).
+    #[arg(long, value_delimiter = ',')]
+    pub heights: Option<Vec<f64>>,
+    /// Which pairs of T(ψ) the sub-problems carry: lazy (default), trust-region, all-pairs.
+    #[arg(long, default_value = "lazy", value_parser = parse_pruning)]
+    pub pruning: Pruning,
+    /// Lazy rows: initial working-set radius cap relative to the median edge length (lazy only).
+    #[arg(long, default_value_t = 0.25)]
+    pub lazy_start: f64,
+    /// Initial trust-region half-width δ0 relative to the median edge length (trust-region only).
+    #[arg(long, default_value_t = 1.0)]
+    pub trust_delta0: f64,
+    /// Inner (Newton-type) steps per T(ψ) at most; 1 gives inexact sub-problems.
+    #[arg(long, default_value_t = 50)]
+    pub max_inner: usize,
+    /// Do not warm-start the QP duals (OSQP, Uzawa; Clarabel never warm-starts).
+    #[arg(long)]
+    pub no_warm_start: bool,
+    /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; README,
+    /// "Accuracy presets"). --qp-tol and --tol-j override its values.
+    #[arg(long, default_value = "default", value_parser = parse_accuracy)]
+    pub accuracy: Accuracy,
+    /// Relative energy tolerance of the outer stopping rule (default: the preset's).
+    #[arg(long)]
+    pub tol_j: Option<f64>,
+    /// Maximum outer iterations.
+    #[arg(long, default_value_t = 2000)]
+    pub max_outer: usize,
+    /// Wall-time limit in seconds: the run then ends with status time_limit and its last
+    /// admissible iterate (checked between inner steps; a QP under way is finished first).
+    #[arg(long)]
+    pub time_limit: Option<f64>,
+    /// Backend tolerance (eps_abs = eps_rel); default: the preset's (default preset: 1e-9
+    /// clarabel, 1e-8 uzawa, 1e-6 osqp).
+    #[arg(long)]
+    pub qp_tol: Option<f64>,
+    /// Run directory (default runs/<scene>-default).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write a VTK frame every K outer iterations (the last is always written).
+    #[arg(long, default_value_t = 1)]
+    pub frame_every: usize,
+    /// No progress line.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Time stepping (§6): each step minimizes ½∫m|v_(i+1) − v_i|² + J over A_(h,ε) with the
+    /// same outer loop (DYNAMICS_NOTES.md).
+    #[arg(long)]
+    pub dynamic: bool,
+    /// Time step (--dynamic; default: the dynamic scene's, or the scene file's [dynamics]).
+    #[arg(long)]
+    pub dt: Option<f64>,
+    /// Number of time steps (--dynamic; default: the dynamic scene's, or the scene file's
+    /// [dynamics]).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Time-stepping scheme: euler (implicit Euler, default) or newmark (average
+    /// acceleration).
+    #[arg(long)]
+    pub scheme: Option<String>,
+}
+
+fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
+    Accuracy::from_name(s)
+        .ok_or_else(|| format!("--accuracy {s:?}: expected one of low, default, high"))
+}
+
+fn parse_pruning(s: &str) -> Result<Pruning, String> {
+    Pruning::from_name(s)
+        .ok_or_else(|| format!("--pruning {s:?}: expected one of lazy, trust-region, all-pairs"))
+}
+
+fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
+    let (i, v) = s
+        .split_once(':')
+        .ok_or_else(|| format!("--perturb {s:?}: expected BALLOON:VALUE, e.g. 0:1e-3"))?;
+    let i: usize = i
+        .parse()
+        .map_err(|_| format!("--perturb {s:?}: balloon index {i:?} is not an integer 0..3"))?;
+    if i > 3 {
+        return Err(format!(
+            "--perturb {s:?}: balloon index {i} out of range 0..3"
+        ));
+    }
+    let v: f64 = v
+        .parse()
+        .map_err(|_| format!("--perturb {s:?}: value {v:?} is not a number"))?;
+    Ok((i, v))
+}
+
+#[derive(serde::Serialize)]
+struct Summary {
+    /// Lemma 5.4 / 5.6 diagnostics (converged runs only).
+    diagnostics: Option<DiagSummary>,
+    scene: String,
+    dim: usize,
+    n: usize,
+    h: f64,
+    eps: f64,
+    backend: String,
+    pruning: &'static str,
+    status: &'static str,
+    outer_iterations: usize,
+    inner_iterations: usize,
+    backend_iterations: usize,
+    initial_energy: f64,
+    final_energy: f64,
+    min_distance: f64,
+    closest_pair: String,
+    wall_time_s: f64,
+    contact_pattern: Vec<[String; 2]>,
+    state: String,
+    energy_monotone: bool,
+    all_iterates_admissible: bool,
+    params: serde_json::Value,
+    settings: OuterSettings,
+    qp_tol: f64,
+    accuracy: &'static str,
+}
+
+/// Loads a scene file and applies its `[solver]` settings to the flags not given explicitly.
+fn scene_from_file(
+    a: &mut RunArgs,
+    explicit: &dyn Fn(&str) -> bool,
+) -> Result<(crate::scene::file::SceneFile, serde_json::Value)> {
+    for (flag, given) in [
+        ("--n", a.n.is_some()),
+        ("--param", !a.params.is_empty()),
+        ("--c", a.c.is_some()),
+        ("--mu", a.mu.is_some()),
+        ("--eps", a.eps.is_some()),
+        ("--perturb", !a.perturb.is_empty()),
+        ("--heights", a.heights.is_some()),
+    ] {
+        if given {
+            bail!(
+                "{flag} is an option of the built-in scenes; a scene file sets its own values ({})",
+                a.scene
+            );
+        }
+    }
+    let f = crate::scene::file::load(std::path::Path::new(&a.scene))?;
+    let s = &f.solver;
+    // A flag given on the command line wins over the file's `[solver]` value.
+    macro_rules! from_file {
+        ($id:literal, $field:ident) => {
+            from_file!($id, $field, |v| Ok::<_, anyhow::Error>(v))
+        };
+        ($id:literal, $field:ident, $convert:expr) => {
+            if !explicit($id) {
+                if let Some(v) = s.$field.clone() {
+                    a.$field = $convert(v)?;
+                }
+            }
+        };
+    }
+    from_file!("backend", backend);
+    from_file!("pruning", pruning);
+    from_file!("max_outer", max_outer);
+    from_file!("max_inner", max_inner);
+    from_file!("lazy_start", lazy_start);
+    from_file!("trust_delta0", trust_delta0);
+    from_file!("tol_j", tol_j, |v| Ok::<_, anyhow::Error>(Some(v)));
+    from_file!("qp_tol", qp_tol, |v| Ok::<_, anyhow::Error>(Some(v)));
+    from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
+        .map_err(anyhow::Error::msg));
+    if !explicit("no_warm_start") {
+        if let Some(v) = s.warm_start {
+            a.no_warm_start = !v;
+        }
+    }
+    let params = serde_json::json!({
+        "scene_file": a.scene,
+        "bodies": f.body_names,
+        "solver": f.solver,
+        "dynamics": f.dynamics,
+    });
+    Ok((f, params))
+}
+
+/// `contactlab run`: a static run (or, with `--dynamic`, a dynamic one) and its run
+/// directory. `explicit(id)` tells whether the flag `id` was given on the command line (it
+/// then wins over a scene file's `[solver]`).
+pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
+    let from_file = a.scene.ends_with(".toml");
+    if a.dynamic {
+        if from_file {
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            return dynamic_run::run_dynamic_file(&a, f, params);
+        }
+        return dynamic_run::run_dynamic(&a);
+    }
+    if a.dt.is_some() || a.steps.is_some() || a.scheme.is_some() {
+        bail!("--dt, --steps and --scheme are options of a dynamic run: add --dynamic");
+    }
+    if registry::DYNAMIC_SCENES.contains(&a.scene.as_str()) {
+        bail!(
+            "scene {:?} is a dynamic scene: run it with --dynamic [--dt DT --steps K --scheme euler|newmark]",
+            a.scene
+        );
+    }
+    let n = if from_file {
+        0
+    } else {
+        a.n.unwrap_or_else(|| registry::default_n(&a.scene))
+    };
+    let (scene, params) = match a.scene.as_str() {
+        _ if from_file => {
+            let (f, params) = scene_from_file(&mut a, explicit)?;
+            (f.scene, params)
+        }
+        "balloons" => {
+            let mut params = BalloonsParams {
+                n,
+                c: a.c.unwrap_or(50.0),
+                mu: a.mu.unwrap_or(1.0),
+                eps: a.eps,
+                ..Default::default()
+            };
+            for (i, v) in &a.perturb {
+                params.perturb[*i] = *v;
+            }
+            if let Some(hs) = &a.heights {
+                if hs.len() != 4 {
+                    bail!(
+                        "--heights takes 4 values (one per balloon), got {}",
+                        hs.len()
+                    );
+                }
+                params.heights.copy_from_slice(hs);
+            }
+            if !a.params.is_empty() {
+                bail!("--param is for the ring and the 3D scenes; the balloons take --c, --mu, --perturb, --heights");
+            }
+            (balloons::build(&params)?, serde_json::to_value(&params)?)
+        }
+        "ring" => {
+            if !a.perturb.is_empty() || a.heights.is_some() || a.c.is_some() {
+                bail!("--c, --perturb and --heights are balloons options; the ring takes --mu and --param p=..,aspect=..,half_span=..");
+            }
+            let mut params = RingParams {
+                n,
+                mu: a.mu.unwrap_or(1.0),
+                eps: a.eps,
+                ..Default::default()
+            };
+            for (k, v) in registry::parse_params(&a.params)? {
+                match k.as_str() {
+                    "p" => params.p = v,
+                    "aspect" => params.aspect = v,
+                    "half_span" => params.half_span = v,
+                    other => bail!("--param {other:?}: the ring knows p, aspect, half_span (and --mu, --eps, --n)"),
+                }
+            }
+            (ring::build(&params)?, serde_json::to_value(&params)?)
+        }
+        name => {
+            if !a.perturb.is_empty() || a.heights.is_some() {
+                bail!("--perturb and --heights are options of the 2D balloons, not of {name:?}");
+            }
+            let mut p = registry::parse_params(&a.params)?;
+            if let Some(mu) = a.mu {
+                p.insert("mu".into(), mu);
+            }
+            if let Some(c) = a.c {
+                if name != "balloons3d" {
+                    bail!(
+                        "--c (a gas constant) is an option of the balloons scenes, not of {name:?}"
+                    );
+                }
+                p.insert("c".into(), c);
+            }
+            let scene = registry::build_scene(name, n, a.eps, &p)?;
+            let json = registry::params_json(name, n, a.eps, &p)?.unwrap_or_default();
+            (scene, json)
+        }
+    };
+    let mut qps = a.accuracy.qp_settings(&a.backend);
+    if let Some(t) = a.qp_tol {
+        qps.eps_abs = t;
+        qps.eps_rel = t;
+    }
+    let mut backend = backend_from_name(&a.backend, &qps)?;
+    let mut settings = OuterSettings {
+        tol_j: a.tol_j.unwrap_or(a.accuracy.tol_j()),
+        max_outer: a.max_outer,
+        pruning: a.pruning,
+        lazy_start: a.lazy_start,
+        trust: TrustSettings {
+            delta0: a.trust_delta0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    settings.inner.max_inner = a.max_inner;
+    settings.inner.warm_start = !a.no_warm_start;
+    settings.time_limit_s = a.time_limit;
+    if a.max_inner == 0 {
+        bail!("--max-inner must be >= 1, got 0");
+    }
+    if !(a.lazy_start >= 0.0 && a.lazy_start.is_finite()) {
+        bail!("--lazy-start must be finite and >= 0, got {}", a.lazy_start);
+    }
+    if !(a.trust_delta0 > 0.0 && a.trust_delta0.is_finite()) {
+        bail!(
+            "--trust-delta0 must be finite and > 0, got {}",
+            a.trust_delta0
+        );
+    }
+    if let Some(t) = a.time_limit {
+        if t.is_nan() || t <= 0.0 {
+            bail!("--time-limit must be > 0 seconds, got {t}");
+        }
+    }
+    if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
+        bail!("--tol-j must be > 0, got {}", settings.tol_j);
+    }
+    // a scene file's n: its number of vertices
+    let n = if from_file { scene.mesh.nv() } else { n };
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-default", scene.name)));
+    let frames = out.join("frames");
+    std::fs::create_dir_all(&frames)
+        .with_context(|| format!("cannot create run directory {}", frames.display()))?;
+    let mesh = &scene.mesh;
+    let mut hist = csv::Writer::from_path(out.join("history.csv"))?;
+    let mut pvd = PvdSeries::default();
+    let mut energies: Vec<(usize, f64)> = Vec::new();
+    let mut snapshots: Vec<(usize, Vec<f64>)> = Vec::new();
+    let mut monotone = true;
+    let mut admissible = true;
+    let mut last_frame = 0usize;
+    let mut io_err: Option<anyhow::Error> = None;
+    let quiet = a.quiet;
+    let eps = scene.eps;
+    let mut observer = |rec: &IterationRecord, x: &[f64]| {
+        if let Some(&(_, jprev)) = energies.last() {
+            monotone &= rec.energy <= jprev;
+        }
+        admissible &= rec.admissible;
+        energies.push((rec.iteration, rec.energy));
+        snapshots.push((rec.iteration, x.to_vec()));
+        let mut step = || -> Result<()> {
+            hist.serialize(rec)?;
+            hist.flush()?;
+            if rec.iteration.is_multiple_of(a.frame_every.max(1)) {
+                let name = format!("frame_{:05}.vtu", rec.iteration);
+                write_vtu(
+                    &frames.join(&name),
+                    mesh.dim,
+                    x,
+                    &mesh.edges,
+                    vtk_triangles(mesh),
+                    &mesh.tets,
+                    &[],
+                )?;
+                pvd.push(rec.iteration as f64, format!("frames/{name}"));
+                pvd.write(&out.join("frames.pvd"))?;
+                last_frame = rec.iteration;
+            }
+            Ok(())
+        };
+        if let Err(e) = step() {
+            io_err.get_or_insert(e);
+        }
+        if !quiet {
+            eprint!(
+                "\r[{} {}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
+                a.backend, a.pruning.as_str(), rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
+            );
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let res = run(
+        mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        backend.as_mut(),
+        &settings,
+        &mut observer,
+    )?;
+    #[allow(clippy::drop_non_drop)] // ends the closure's borrows of io_err, hist, pvd
+    drop(observer);
+    if !quiet {
+        eprintln!();
+    }
+    if let Some(e) = io_err {
+        return Err(e.context("writing the run directory"));
+    }
+    hist.flush()?;
+    drop(hist);
+    if last_frame != res.outer_iterations {
+        let name = format!("frame_{:05}.vtu", res.outer_iterations);
+        write_vtu(
+            &frames.join(&name),
+            mesh.dim,
+            &res.x,
+            &mesh.edges,
+            vtk_triangles(mesh),
+            &mesh.tets,
+            &[],
+        )?;
+        pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
+        pvd.write(&out.join("frames.pvd"))?;
+    }
+    // The state the run returns, its last admissible iterate, whatever the status (after an
+    // inadmissible or energy-increasing step the last frame is that step's iterate).
+    write_vtu(
+        &out.join("final.vtu"),
+        mesh.dim,
+        &res.x,
+        &mesh.edges,
+        vtk_triangles(mesh),
+        &mesh.tets,
+        &[],
+    )?;
+    let near = near_pairs(mesh, &res.x, 1.01 * scene.eps, false);
+    let pattern = contact_pattern(mesh, &res.x, &near, scene.eps);
+    let names: Vec<[String; 2]> = pattern
+        .iter()
+        .map(|&(i, j)| [mesh.bodies[i].name.clone(), mesh.bodies[j].name.clone()])
+        .collect();
+    let state = match scene.name.as_str() {
+        "ring" => ring::classify_state(mesh, &res.x, scene.eps),
+        "balloons" => {
+            // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
+            let balloon = |b: usize| {
+                mesh.bodies[b]
+                    .name
+                    .strip_prefix("balloon")
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .filter(|&k| k < 4)
+            };
+            let balloon_pairs: Vec<(usize, usize)> = pattern
+                .iter()
+                .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
+                .collect();
+            classify_state(&balloon_pairs)
+        }
+        _ => contact_state(&names),
+    };
+    // Picture: initial, an intermediate and the final shapes, J beside them.
+    let mid = snapshots.len() / 2;
+    let panels = [
+        ("initial (k=0)".to_string(), &snapshots[0].1),
+        (
+            format!("intermediate (k={})", snapshots[mid].0),
+            &snapshots[mid].1,
+        ),
+        (format!("final (k={})", res.outer_iterations), &res.x),
+    ];
+    let title = format!(
+        "{} n={} backend={} state={} J={:.10e}",
+        scene.name, n, a.backend, state, res.energy
+    );
+    let svg = if mesh.dim == 3 {
+        let faces = drawn_faces(mesh);
+        let shapes: Vec<Shape3> = panels
+            .iter()
+            .map(|(label, x)| Shape3 {
+                label: label.clone(),
+                x,
+                edges: &mesh.edges,
+                faces: &faces,
+            })
+            .collect();
+        projection_svg(&shapes, &energies, &title)
+    } else {
+        let shapes: Vec<Shape> = panels
+            .iter()
+            .map(|(label, x)| Shape {
+                label: label.clone(),
+                x,
+                edges: &mesh.edges,
+                triangles: &mesh.triangles,
+            })
+            .collect();
+        shapes_and_energy_svg(&shapes, &energies, &title)
+    };
+    write_svg(&out.join("shapes.svg"), &svg)?;
+    let diagnostics = if res.status == RunStatus::Converged {
+        let (diag, tol) = case::lemma_diagnostics(&scene, &res)?;
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for p in &diag.pairs {
+            w.serialize(PairRow::from(p))?;
+        }
+        write_atomic(&out.join("multipliers.csv"), &w.into_inner()?)?;
+        Some((diag, tol))
+    } else {
+        None
+    };
+    let summary = Summary {
+        diagnostics: diagnostics
+            .as_ref()
+            .map(|(d, tol)| DiagSummary::new(d, *tol)),
+        scene: scene.name.clone(),
+        dim: mesh.dim,
+        n,
+        h: scene.h,
+        eps: scene.eps,
+        backend: a.backend.clone(),
+        pruning: settings.pruning.as_str(),
+        status: res.status.as_str(),
+        outer_iterations: res.outer_iterations,
+        inner_iterations: res.inner_iterations,
+        backend_iterations: res.backend_iterations,
+        initial_energy: energies[0].1,
+        final_energy: res.energy,
+        min_distance: res.min_distance.distance,
+        closest_pair: res.min_distance.pair.to_string(),
+        wall_time_s: res.wall_time_s,
+        contact_pattern: names,
+        state: state.clone(),
+        energy_monotone: monotone,
+        all_iterates_admissible: admissible,
+        params,
+        settings,
+        qp_tol: qps.eps_abs,
+        accuracy: a.accuracy.as_str(),
+    };
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!(
+        "{}: status {} after {} outer iterations, J = {:.12e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        a.backend,
+        res.status.as_str(),
+        res.outer_iterations,
+        res.energy,
+        state,
+        res.min_distance.distance / scene.eps,
+        res.wall_time_s,
+        out.display()
+    );
+    if !monotone || !admissible {
+        bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
+    }
+    if res.status != RunStatus::Converged {
+        return Err(RunFinished {
+            status: res.status.as_str().into(),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// The state of a 3D run: the pairs of bodies in contact (`lower-upper;…`), or
+/// `no-contact`.
+fn contact_state(pairs: &[[String; 2]]) -> String {
+    if pairs.is_empty() {
+        "no-contact".into()
+    } else {
+        pairs
+            .iter()
+            .map(|[a, b]| format!("{a}-{b}"))
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+}
+
+/// The faces the 3D picture fills: those of bodies with a free vertex. A body whose vertices
+/// are all fixed (the box of balloons3d, an obstacle sheet) is drawn by its edges alone, so
+/// it does not hide what it holds.
+fn drawn_faces(mesh: &crate::scene::mesh::Mesh) -> Vec<[usize; 3]> {
+    mesh.bodies
+        .iter()
+        .filter(|b| b.vertices.iter().any(|&v| !mesh.fixed[v]))
+        .flat_map(|b| b.faces.iter().map(|&f| mesh.faces[f]))
+        .collect()
+}
+
+/// The triangles a VTK frame shows: the solid elements in 2D, the contact faces in 3D (the
+/// surfaces' triangles and the solids' boundary).
+fn vtk_triangles(mesh: &crate::scene::mesh::Mesh) -> &[[usize; 3]] {
+    if mesh.dim == 3 {
+        &mesh.faces
+    } else {
+        &mesh.triangles
+    }
+}
+
+/// One row of `multipliers.csv`: an active pair at the fixed point. Unused row slots (a
+/// point–edge pair has 2 rows, vertex–triangle 3, edge–edge 4) are empty.
+#[derive(serde::Serialize)]
+struct PairRow {
+    kind: &'static str,
+    first: usize,
+    second: usize,
+    rows: usize,
+    distance: f64,
+    w0: Option<f64>,
+    w1: Option<f64>,
+    w2: Option<f64>,
+    w3: Option<f64>,
+    active0: Option<bool>,
+    active1: Option<bool>,
+    active2: Option<bool>,
+    active3: Option<bool>,
+    mu0: Option<f64>,
+    mu1: Option<f64>,
+    mu2: Option<f64>,
+    mu3: Option<f64>,
+    lambda: f64,
+}
+
+impl From<&PairMultiplier> for PairRow {
+    fn from(p: &PairMultiplier) -> Self {
+        let n = p.rows;
+        let w = |i: usize| (i < n).then_some(p.weight[i]);
+        let a = |i: usize| (i < n).then_some(p.active[i]);
+        let m = |i: usize| (i < n).then_some(p.mu[i]);
+        PairRow {
+            kind: p.kind,
+            first: p.first,
+            second: p.second,
+            rows: n,
+            distance: p.distance,
+            w0: w(0),
+            w1: w(1),
+            w2: w(2),
+            w3: w(3),
+            active0: a(0),
+            active1: a(1),
+            active2: a(2),
+            active3: a(3),
+            mu0: m(0),
+            mu1: m(1),
+            mu2: m(2),
+            mu3: m(3),
+            lambda: p.lambda,
+        }
+    }
+}
+
+/// The scalar part of [`ConvergedDiagnostics`] (the pairs go to `multipliers.csv`).
+#[derive(serde::Serialize)]
+struct DiagSummary {
+    h: f64,
+    active_pairs: usize,
+    active_rows: usize,
+    stationarity_canonical: f64,
+    stationarity_raw: f64,
+    gradient_norm: f64,
+    complementarity_raw: f64,
+    min_raw_dual: f64,
+    lambda_norm_h: f64,
+    c_phi: usize,
+    max_edges_per_vertex: usize,
+    residual_hm1: f64,
+    bound: f64,
+    ratio: f64,
+    dual_qp_status: &'static str,
+    dual_qp_tol: f64,
+}
+
+impl DiagSummary {
+    fn new(d: &ConvergedDiagnostics, dual_qp_tol: f64) -> Self {
+        DiagSummary {
+            dual_qp_tol,
+            h: d.h,
+            active_pairs: d.active_pairs,
+            active_rows: d.active_rows,
+            stationarity_canonical: d.stationarity_canonical,
+            stationarity_raw: d.stationarity_raw,
+            gradient_norm: d.gradient_norm,
+            complementarity_raw: d.complementarity_raw,
+            min_raw_dual: d.min_raw_dual,
+            lambda_norm_h: d.lambda_norm_h,
+            c_phi: d.c_phi,
+            max_edges_per_vertex: d.max_edges_per_vertex,
+            residual_hm1: d.residual_hm1,
+            bound: d.bound,
+            ratio: d.ratio,
+            dual_qp_status: d.dual_qp_status,
+        }
+    }
+}
+
+/// A run that finished and wrote its outputs, but with a failure status (exit code 1).
+#[derive(Debug)]
+pub struct RunFinished {
+    /// The status (`max_outer_iterations`, `subproblem_failed`, …).
+    pub status: String,
+}
+
+impl std::fmt::Display for RunFinished {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the run finished with status {} (its outputs are written)",
+            self.status
+        )
+    }
+}
+
+impl std::error::Error for RunFinished {}

@@ -1,0 +1,8 @@
+//! Solving: the sub-problem `min J over T(ψ)` by Newton-type steps and a QP backend
+//! ([`subproblem`]), the outer loop of §3 ([`outer`]), time stepping of §6 ([`dynamics`]) and
+//! the accuracy presets ([`settings`]).
+
+pub mod dynamics;
+pub mod outer;
+pub mod settings;
+pub mod subproblem;
