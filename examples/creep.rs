@@ -1,4 +1,4 @@
-//! The 3D creep (README "3D"), two measurements:
+//! The 3D creep (docs/measurements.md, 3D runs), two measurements:
 //! 1. against the QP margin: rod n = 8 and solids n = 2, 300 outer steps, J and ΔJ at the end;
 //! 2. the stationarity of a "converged" state (rod, solids and sheets at their defaults) with
 //!    the diagnostics' activity tolerance ×1 … ×10⁴: does a looser set of active pairs

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 2's agreement check: the default balloons scene (n = 40) with each backend at its
+# The three backends' agreement check: the default balloons scene (n = 40) with each backend at its
 # default tolerance; prints final energy, state and status of each, and the largest relative
 # energy difference. Usage: bash experiments/backends_n40.sh [N]
 set -euo pipefail

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The balloons state table (issue 2): for n = 20, 40, 80, the state and energy reached with no
+# The balloons state table: for n = 20, 40, 80, the state and energy reached with no
 # perturbation, with a relative perturbation 1e-6, 1e-3, 1e-2 of C_0, and from the asymmetric
 # start (heights 0.9, 0.2, 0.9, 0.2). One run directory per case under runs/states/, then
 # results/balloons_states.csv collected from their summary.json files.

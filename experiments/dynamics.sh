@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The dynamic case (issue 6): the dt / h sweep of experiments/dynamics.toml into
+# The dynamic case (§6): the dt / h sweep of experiments/dynamics.toml into
 # results/dynamics.csv (resumable), and the contact force of the drop scene over time
 # (implicit Euler: results/dynamics.svg; Newmark: results/dynamics_newmark.svg), from
 # `contactlab run drop --dynamic` with the scene's defaults (dt = 0.02, 300 steps).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The sweeps of issue 4 and their plots, in order. Each sweep resumes (--resume), so a rerun
+# The committed sweeps and their plots, in order. Each sweep resumes (--resume), so a rerun
 # after an interruption runs only the missing rows. Timing sweeps use --jobs 1.
 # Usage: bash experiments/run_all.sh [NAME ...]   (default: all six)
 set -euo pipefail

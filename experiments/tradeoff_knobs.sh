@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Speed against accuracy (issue 3, point 3): inexact sub-problems (--max-inner), the backend
+# Speed against accuracy: inexact sub-problems (--max-inner), the backend
 # tolerance (--qp-tol) and the outer tolerance (--tol-j), one knob at a time from the default,
 # on two balloons scenes with lazy rows. Each case's error is measured against a reference run
 # with tighter settings (tol_j = 1e-12, the default 50 inner steps and QP tolerance).
