@@ -1,6 +1,6 @@
 //! `contactlab sweep FILE.toml --out FILE.csv [--jobs N] [--shard K/N] [--resume]`: expands a
 //! sweep file into runs, executes them in parallel and writes one CSV row per run, flushed as
-//! each run ends (README, "Sweeps").
+//! each run ends (docs/sweeps.md).
 //!
 //! Guarantees (tested in `tests/sweep.rs`):
 //! - a row is written and flushed as soon as its run ends, so an interrupted sweep loses no
@@ -13,8 +13,11 @@
 //!   message in `error`, never an abort of the sweep;
 //! - a sweep that ends with every run present rewrites its CSV in the sweep file's order.
 
-use crate::harness::case::{self, f, CaseSettings, RUN_COLUMNS};
+use crate::harness::case::{self, CaseSettings};
 use crate::harness::diagnostics::h1_distance;
+use crate::harness::rows::{
+    csv_line, header, record_line, CaseColumns, DynamicRow, RunRow, StaticRow,
+};
 use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
@@ -295,59 +298,14 @@ impl RunSpec {
     }
 }
 
-/// The case columns that precede [`RUN_COLUMNS`].
-pub const CASE_COLUMNS: [&str; 8] = [
-    "key", "scene", "n", "eps_rule", "params", "backend", "accuracy", "pruning",
-];
-
-/// The full header of a sweep CSV.
-pub fn header() -> Vec<&'static str> {
-    CASE_COLUMNS
-        .iter()
-        .chain(RUN_COLUMNS.iter())
-        .copied()
-        .collect()
+/// The header of a static sweep's CSV: [`CaseColumns`] then [`StaticRow`].
+pub fn header_static() -> Vec<String> {
+    header::<(CaseColumns, StaticRow)>()
 }
 
-/// The columns of a dynamic run's row, after [`CASE_COLUMNS`] (DYNAMICS_NOTES.md).
-pub const DYNAMIC_COLUMNS: [&str; 28] = [
-    "dim",
-    "h",
-    "eps",
-    "dt",
-    "steps",
-    "scheme",
-    "qp_tol",
-    "tol_j",
-    "status",
-    "steps_taken",
-    "steps_max_outer",
-    "all_admissible",
-    "min_distance",
-    "initial_energy",
-    "final_energy",
-    "final_kinetic",
-    "max_energy_increase",
-    "energy_drift",
-    "momentum_error",
-    "force_mean_rest",
-    "force_jump_rest",
-    "force_std_rest",
-    "weight_ratio_rest",
-    "outer_iterations",
-    "max_outer_per_step",
-    "wall_time_s",
-    "t_total_s",
-    "error",
-];
-
-/// The header of a dynamic sweep's CSV.
-pub fn dynamic_header() -> Vec<&'static str> {
-    CASE_COLUMNS
-        .iter()
-        .chain(DYNAMIC_COLUMNS.iter())
-        .copied()
-        .collect()
+/// The header of a dynamic sweep's CSV: [`CaseColumns`] then [`DynamicRow`].
+pub fn header_dynamic() -> Vec<String> {
+    header::<(CaseColumns, DynamicRow)>()
 }
 
 /// Reads and validates a sweep file, and expands it into runs in file order (scene block, n,
@@ -646,7 +604,7 @@ struct Reference {
 
 /// Reads the rows already in `path` (for --resume): the keys, after dropping a torn last line
 /// (one without its newline, left by a kill during a write). Errors when the header differs.
-fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
+fn existing_keys(path: &Path, want: &[String]) -> Result<BTreeSet<String>> {
     let mut bytes = std::fs::read(path).with_context(|| format!("reading {path:?}"))?;
     if let Some(end) = bytes.iter().rposition(|&b| b == b'\n') {
         if end + 1 < bytes.len() {
@@ -685,42 +643,35 @@ fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
     Ok(keys)
 }
 
-/// The row of a run's outcome: its values, or an `error` or `panic` row with the message.
-fn outcome_row(
-    out: std::thread::Result<Result<BTreeMap<&'static str, String>>>,
-) -> BTreeMap<&'static str, String> {
-    let (status, error) = match out {
-        Ok(Ok(m)) => return m,
-        Ok(Err(e)) => ("error", format!("{e:#}")),
-        Err(p) => (
+/// The row of a run: `run`'s row, or an `error` or `panic` row with the message (a panic is
+/// caught, so one bad run never aborts the sweep).
+fn catch_row<R: RunRow>(run: impl FnOnce() -> Result<R>) -> R {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
+        Ok(Ok(row)) => row,
+        Ok(Err(e)) => R::failed("error", format!("{e:#}")),
+        Err(p) => R::failed(
             "panic",
             p.downcast_ref::<String>()
                 .cloned()
                 .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_else(|| "panic".into()),
         ),
-    };
-    BTreeMap::from([("status", status.to_string()), ("error", error)])
+    }
 }
 
-/// Runs one spec into its row (never panics: a panic becomes a `panic` row).
-fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static str, String> {
+/// Runs one static spec into its row (never panics: a panic becomes a `panic` row).
+fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> StaticRow {
     let t = Instant::now();
-    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+    let mut row = catch_row(|| -> Result<_> {
         let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
         let o = case::execute(&scene, &spec.settings, &mut |_, _| {})?;
-        let mut m = case::row_values(&scene, &o);
+        let mut row = StaticRow::of_case(&scene, &o);
         if let Some(r) = reference {
-            m.insert("reference_energy", f(r.energy));
+            row.reference_energy = Some(r.energy);
             if r.status == "converged" {
-                m.insert(
-                    "energy_error",
-                    f((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE)),
-                );
-                m.insert(
-                    "position_error_h1",
-                    f(h1_distance(&scene.mesh, &o.res.x, &r.x)),
-                );
+                row.energy_error =
+                    Some((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE));
+                row.position_error_h1 = Some(h1_distance(&scene.mesh, &o.res.x, &r.x));
             }
         }
         let worst = o
@@ -728,22 +679,20 @@ fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static s
             .iter()
             .map(|r| r.min_distance)
             .fold(f64::INFINITY, f64::min);
-        m.insert("max_violation", f((scene.eps - worst).max(0.0)));
-        Ok(m)
-    }));
-    let mut m = outcome_row(out);
-    m.entry("h").or_insert_with(|| f(spec.h));
-    m.entry("eps").or_insert_with(|| f(spec.eps));
-    m.entry("wall_time_s")
-        .or_insert_with(|| f(t.elapsed().as_secs_f64()));
-    m
+        row.max_violation = Some((scene.eps - worst).max(0.0));
+        Ok(row)
+    });
+    row.h.get_or_insert(spec.h);
+    row.eps.get_or_insert(spec.eps);
+    row.wall_time_s.get_or_insert(t.elapsed().as_secs_f64());
+    row
 }
 
 /// Runs one dynamic spec into its row (never panics: a panic becomes a `panic` row).
-fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
+fn run_one_dynamic(spec: &RunSpec) -> DynamicRow {
     let t = Instant::now();
     let d = spec.dynamic.as_ref().expect("a dynamic spec");
-    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+    let mut row = catch_row(|| -> Result<_> {
         let mut ds = crate::scene::registry::build_dynamic_scene(
             &spec.scene,
             Some(spec.n),
@@ -763,51 +712,25 @@ fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
             &qp,
             &mut |_, _, _| {},
         )?;
-        let mut m = BTreeMap::new();
-        m.insert("dim", ds.scene.mesh.dim.to_string());
-        m.insert("h", f(ds.scene.h));
-        m.insert("eps", f(ds.scene.eps));
-        m.insert("qp_tol", f(qp.eps_abs));
-        m.insert(
-            "tol_j",
-            f(spec
-                .settings
-                .tol_j
-                .unwrap_or(spec.settings.accuracy.tol_j())),
-        );
-        m.insert("status", mt.status.clone());
-        m.insert("steps_taken", mt.steps_taken.to_string());
-        m.insert("steps_max_outer", mt.steps_max_outer.to_string());
-        m.insert("all_admissible", mt.all_admissible.to_string());
-        m.insert("min_distance", f(mt.min_distance));
-        m.insert("initial_energy", f(mt.initial_energy));
-        m.insert("final_energy", f(mt.final_energy));
-        m.insert("final_kinetic", f(mt.final_kinetic));
-        m.insert("max_energy_increase", f(mt.max_energy_increase));
-        m.insert("energy_drift", f(mt.energy_drift));
-        m.insert("momentum_error", mt.momentum_error.map_or(String::new(), f));
-        if let Some(r) = &mt.rest {
-            m.insert("force_mean_rest", f(r.mean));
-            m.insert("force_jump_rest", f(r.max_jump_rel));
-            m.insert("force_std_rest", f(r.std_rel));
-            if matches!(spec.scene.as_str(), "drop" | "drop3d") {
-                let g = spec.params.get("g").copied().unwrap_or(9.81);
-                m.insert("weight_ratio_rest", f(r.mean / (mt.free_mass * g)));
-            }
-        }
-        m.insert("outer_iterations", mt.outer_iterations.to_string());
-        m.insert("max_outer_per_step", mt.max_outer_per_step.to_string());
-        m.insert("wall_time_s", f(mt.wall_time_s));
-        Ok(m)
-    }));
-    let mut m = outcome_row(out);
-    m.insert("dt", f(d.dt));
-    m.insert("steps", d.steps.to_string());
-    m.insert("scheme", d.scheme.as_str().to_string());
-    m.entry("h").or_insert_with(|| f(spec.h));
-    m.entry("eps").or_insert_with(|| f(spec.eps));
-    m.insert("t_total_s", f(t.elapsed().as_secs_f64()));
-    m
+        let g = matches!(spec.scene.as_str(), "drop" | "drop3d")
+            .then(|| spec.params.get("g").copied().unwrap_or(9.81));
+        Ok(DynamicRow::of_metrics(
+            ds.scene.mesh.dim,
+            ds.scene.h,
+            ds.scene.eps,
+            qp.eps_abs,
+            &spec.settings,
+            &mt,
+            g,
+        ))
+    });
+    row.dt = d.dt;
+    row.steps = d.steps;
+    row.scheme = d.scheme.as_str().to_string();
+    row.h.get_or_insert(spec.h);
+    row.eps.get_or_insert(spec.eps);
+    row.t_total_s = Some(t.elapsed().as_secs_f64());
+    row
 }
 
 /// Solves the reference of a group.
@@ -832,10 +755,20 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
     })
 }
 
-fn csv_line(values: &[String]) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(values)?;
-    w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))
+impl RunSpec {
+    /// The case columns of this run's row.
+    fn case_columns(&self) -> CaseColumns {
+        CaseColumns {
+            key: self.key.clone(),
+            scene: self.scene.clone(),
+            n: self.n,
+            eps_rule: self.eps_rule.clone(),
+            params: self.params_label(),
+            backend: self.settings.backend.clone(),
+            accuracy: self.settings.accuracy.as_str().to_string(),
+            pruning: self.settings.pruning.as_str().to_string(),
+        }
+    }
 }
 
 /// `contactlab sweep`.
@@ -844,8 +777,6 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         bail!("--jobs 0: need at least one job");
     }
     let runs = load(&a.file)?;
-    let dynamic = runs.first().is_some_and(|r| r.dynamic.is_some());
-    let hdr_cols = if dynamic { dynamic_header() } else { header() };
     if a.list {
         for r in &runs {
             if in_shard(&r.key, a.shard) {
@@ -854,6 +785,21 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         }
         return Ok(());
     }
+    if runs.first().is_some_and(|r| r.dynamic.is_some()) {
+        sweep_rows(a, &runs, |r, _| run_one_dynamic(r))
+    } else {
+        sweep_rows(a, &runs, run_one)
+    }
+}
+
+/// Runs the pending runs of `runs` (this shard's, not yet in `--out`) and appends one row of
+/// type `R` each, built by `run_one` from the spec and its group's reference.
+fn sweep_rows<R: RunRow>(
+    a: &SweepArgs,
+    runs: &[RunSpec],
+    run_one: impl Fn(&RunSpec, Option<&Reference>) -> R + Sync,
+) -> Result<()> {
+    let hdr_cols = header::<(CaseColumns, R)>();
     let done = if a.out.exists() {
         if !a.resume {
             bail!(
@@ -882,8 +828,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         .open(&a.out)
         .with_context(|| format!("opening {:?}", a.out))?;
     if file.metadata()?.len() == 0 {
-        let hdr: Vec<String> = hdr_cols.iter().map(|s| s.to_string()).collect();
-        file.write_all(&csv_line(&hdr)?)?;
+        file.write_all(&record_line(&hdr_cols)?)?;
         file.flush()?;
     }
     let name = a.file.display().to_string();
@@ -904,15 +849,63 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         .num_threads(a.jobs)
         .build()
         .context("building the thread pool")?;
-    // references: one per group with pending runs, solved first (in parallel)
+    let refs = solve_references(a, &pool, &todo);
+    let t0 = Instant::now();
+    let writer = Mutex::new((file, 0usize));
+    let total = todo.len();
+    let result: Result<()> = pool.install(|| {
+        todo.par_iter().try_for_each(|r| -> Result<()> {
+            let row = run_one(r, refs.get(&r.group_key()));
+            let line = csv_line(&(r.case_columns(), &row))?;
+            let mut g = writer.lock().unwrap_or_else(|e| e.into_inner());
+            g.0.write_all(&line)?;
+            g.0.flush()?;
+            g.1 += 1;
+            if !a.quiet {
+                eprintln!(
+                    "[{}/{} {:.0}s] {} {} {} s",
+                    g.1,
+                    total,
+                    t0.elapsed().as_secs_f64(),
+                    r.key,
+                    row.status(),
+                    row.wall_time_cell(),
+                );
+            }
+            if a.stop_after == Some(g.1) {
+                g.0.sync_all()?;
+                std::process::exit(3);
+            }
+            Ok(())
+        })
+    });
+    result?;
+    drop(writer);
+    // complete: rewrite in the sweep file's order
+    let present = existing_keys(&a.out, &hdr_cols)?;
+    if mine.iter().all(|r| present.contains(&r.key)) {
+        sort_csv(&a.out, &mine)?;
+    }
+    if !a.quiet {
+        eprintln!("sweep {name}: done, {:?}", a.out);
+    }
+    Ok(())
+}
+
+/// The references: one per group with pending runs that asks for one, solved first (in
+/// parallel); a failed reference leaves its group's error columns empty.
+fn solve_references(
+    a: &SweepArgs,
+    pool: &rayon::ThreadPool,
+    todo: &[&RunSpec],
+) -> HashMap<String, Reference> {
     let mut groups: BTreeMap<String, &RunSpec> = BTreeMap::new();
-    for r in &todo {
+    for r in todo {
         if r.reference.is_some() {
             groups.entry(r.group_key()).or_insert(r);
         }
     }
-    let t0 = Instant::now();
-    let refs: HashMap<String, Reference> = pool.install(|| {
+    pool.install(|| {
         groups
             .par_iter()
             .filter_map(|(g, r)| {
@@ -937,62 +930,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
                 }
             })
             .collect()
-    });
-    let writer = Mutex::new((file, 0usize));
-    let total = todo.len();
-    let result: Result<()> = pool.install(|| {
-        todo.par_iter().try_for_each(|r| -> Result<()> {
-            let mut m = if dynamic {
-                run_one_dynamic(r)
-            } else {
-                run_one(r, refs.get(&r.group_key()))
-            };
-            m.insert("key", r.key.clone());
-            m.insert("scene", r.scene.clone());
-            m.insert("n", r.n.to_string());
-            m.insert("eps_rule", r.eps_rule.clone());
-            m.insert("params", r.params_label());
-            m.insert("backend", r.settings.backend.clone());
-            m.insert("accuracy", r.settings.accuracy.as_str().to_string());
-            m.insert("pruning", r.settings.pruning.as_str().to_string());
-            let values: Vec<String> = hdr_cols
-                .iter()
-                .map(|c| m.get(c).cloned().unwrap_or_default())
-                .collect();
-            let line = csv_line(&values)?;
-            let mut g = writer.lock().unwrap_or_else(|e| e.into_inner());
-            g.0.write_all(&line)?;
-            g.0.flush()?;
-            g.1 += 1;
-            if !a.quiet {
-                eprintln!(
-                    "[{}/{} {:.0}s] {} {} {} s",
-                    g.1,
-                    total,
-                    t0.elapsed().as_secs_f64(),
-                    r.key,
-                    m.get("status").map_or("", |s| s.as_str()),
-                    m.get("wall_time_s").map_or("", |s| s.as_str()),
-                );
-            }
-            if a.stop_after == Some(g.1) {
-                g.0.sync_all()?;
-                std::process::exit(3);
-            }
-            Ok(())
-        })
-    });
-    result?;
-    drop(writer);
-    // complete: rewrite in the sweep file's order
-    let present = existing_keys(&a.out, &hdr_cols)?;
-    if mine.iter().all(|r| present.contains(&r.key)) {
-        sort_csv(&a.out, &mine)?;
-    }
-    if !a.quiet {
-        eprintln!("sweep {name}: done, {:?}", a.out);
-    }
-    Ok(())
+    })
 }
 
 /// Rewrites `path` with its rows in the order of `order` (atomic: a temporary file renamed).
@@ -1200,7 +1138,8 @@ mod tests {
         // a static scene run dynamically needs dt and steps (no defaults)
         let e = err("[[scene]]\nname = \"ring\"\ndynamic = true\nn = [20]\n");
         assert!(e.contains("dt must be finite and > 0, got 0"), "{e}");
-        assert_ne!(dynamic_header(), header());
-        assert_eq!(&dynamic_header()[..CASE_COLUMNS.len()], &CASE_COLUMNS[..]);
+        assert_ne!(header_dynamic(), header_static());
+        let case = header::<CaseColumns>();
+        assert_eq!(&header_dynamic()[..case.len()], &case[..]);
     }
 }
