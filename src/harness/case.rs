@@ -92,6 +92,22 @@ pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDia
     Ok(last.expect("DIAG_QP_TOLS is not empty"))
 }
 
+/// The outer-loop settings of a case, static or dynamic: the preset's tol_J unless overridden,
+/// max_outer, pruning and max_inner (the time limit is a static run's, set by
+/// [`execute_with`]).
+pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
+    let mut settings = OuterSettings {
+        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+        max_outer: cs.max_outer,
+        pruning: cs.pruning,
+        ..Default::default()
+    };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
+    settings
+}
+
 /// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a converged
 /// run.
 pub fn execute(
@@ -113,16 +129,8 @@ pub fn execute_with(
     observer: &mut dyn FnMut(&IterationRecord, &[f64]),
 ) -> Result<CaseOutcome> {
     let qp = cs.accuracy.qp_settings(&cs.backend);
-    let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
-    let mut settings = OuterSettings {
-        tol_j,
-        max_outer: cs.max_outer,
-        pruning: cs.pruning,
-        ..Default::default()
-    };
-    if let Some(k) = cs.max_inner {
-        settings.inner.max_inner = k;
-    }
+    let mut settings = outer_settings(cs);
+    let tol_j = settings.tol_j;
     settings.time_limit_s = cs.time_limit_s;
     let mut records = Vec::new();
     let res = run(
@@ -207,15 +215,7 @@ pub fn execute_dynamic(
     observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
 ) -> Result<(DynamicResult, DynamicMetrics)> {
     let mut backend = backend_from_name(&cs.backend, qp)?;
-    let mut settings = OuterSettings {
-        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
-        max_outer: cs.max_outer,
-        pruning: cs.pruning,
-        ..Default::default()
-    };
-    if let Some(k) = cs.max_inner {
-        settings.inner.max_inner = k;
-    }
+    let settings = outer_settings(cs);
     let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density)?;
     let mut system = System {
         mesh: &ds.scene.mesh,

@@ -323,10 +323,45 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
     if file.scene.is_empty() {
         bail!("no [[scene]] block");
     }
+    check_one_kind(&file.scene)?;
     let mut runs = Vec::new();
     let mut seen = BTreeSet::new();
-    let dynamic = file.scene[0].dynamic;
-    if let Some(b) = file.scene.iter().find(|b| b.dynamic != dynamic) {
+    for (bi, b) in file.scene.iter().enumerate() {
+        let at = format!("scene block {} ({})", bi + 1, b.name);
+        let s = BlockSettings::resolve(bi, b, &file.defaults)?;
+        let rules = eps_rules(b)?;
+        let levels = levels(&at, b)?;
+        let schemes = schemes(&at, b)?;
+        if b.dynamic && s.reference.is_some() {
+            bail!("{at}: a reference run is for static sweeps");
+        }
+        if levels.is_empty() {
+            bail!("{at}: give a list n or a list h");
+        }
+        for &n in &levels {
+            let (h, dyns) = level_variants(&at, b, n, &schemes)?;
+            for rule in &rules {
+                for dy in &dyns {
+                    for be in &s.backends {
+                        for acc in &s.accuracy {
+                            let spec = s.run(b, n, h, rule, dy, be, *acc);
+                            if !seen.insert(spec.key.clone()) {
+                                bail!("run {} appears twice in the sweep file", spec.key);
+                            }
+                            runs.push(spec);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// A sweep file is all static or all dynamic (the two kinds of row have different columns).
+fn check_one_kind(blocks: &[SceneBlock]) -> Result<()> {
+    let dynamic = blocks[0].dynamic;
+    if let Some(b) = blocks.iter().find(|b| b.dynamic != dynamic) {
         bail!(
             "scene block {:?} has dynamic = {} but the first block has dynamic = {dynamic}: a \
              sweep file is all static or all dynamic (their CSVs have different columns)",
@@ -334,85 +369,71 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             b.dynamic
         );
     }
-    for (bi, b) in file.scene.iter().enumerate() {
+    Ok(())
+}
+
+/// The settings of a scene block, its own or the file's defaults, checked.
+struct BlockSettings {
+    backends: Vec<String>,
+    accuracy: Vec<Accuracy>,
+    pruning: Pruning,
+    tol_j: Option<f64>,
+    max_outer: usize,
+    max_inner: Option<usize>,
+    time_limit_s: Option<f64>,
+    reference: Option<ReferenceSpec>,
+}
+
+impl BlockSettings {
+    /// Block `bi`'s settings, every name and value checked.
+    fn resolve(bi: usize, b: &SceneBlock, defaults: &Common) -> Result<BlockSettings> {
+        let at = format!("scene block {} ({})", bi + 1, b.name);
         if !b.dynamic && (!b.dt.is_empty() || b.steps.is_some() || b.scheme.is_some()) {
-            bail!(
-                "scene block {} ({}): dt, steps and scheme need dynamic = true",
-                bi + 1,
-                b.name
-            );
+            bail!("{at}: dt, steps and scheme need dynamic = true");
         }
         let pick = |o: &Option<Vec<String>>, d: &Option<Vec<String>>, dflt: &str| {
             o.clone()
                 .or_else(|| d.clone())
                 .unwrap_or_else(|| vec![dflt.to_string()])
         };
-        let backends = pick(&b.common.backends, &file.defaults.backends, "clarabel");
-        let accs = pick(&b.common.accuracy, &file.defaults.accuracy, "default");
-        let pruning_name = b
-            .common
+        let c = &b.common;
+        let backends = pick(&c.backends, &defaults.backends, "clarabel");
+        let accs = pick(&c.accuracy, &defaults.accuracy, "default");
+        let pruning_name = c
             .pruning
             .clone()
-            .or_else(|| file.defaults.pruning.clone())
+            .or_else(|| defaults.pruning.clone())
             .unwrap_or_else(|| "lazy".into());
         let pruning = Pruning::from_name(&pruning_name).with_context(|| {
-            format!(
-                "scene block {} ({}): pruning {pruning_name:?}: expected lazy, trust-region or all-pairs",
-                bi + 1,
-                b.name
-            )
+            format!("{at}: pruning {pruning_name:?}: expected lazy, trust-region or all-pairs")
         })?;
-        let tol_j = b.common.tol_j.or(file.defaults.tol_j);
+        let tol_j = c.tol_j.or(defaults.tol_j);
         if let Some(t) = tol_j {
             if !(t > 0.0 && t.is_finite()) {
-                bail!(
-                    "scene block {} ({}): tol_j = {t} must be finite and > 0",
-                    bi + 1,
-                    b.name
-                );
+                bail!("{at}: tol_j = {t} must be finite and > 0");
             }
         }
-        let max_outer = b
-            .common
-            .max_outer
-            .or(file.defaults.max_outer)
-            .unwrap_or(2000);
-        let max_inner = b.common.max_inner.or(file.defaults.max_inner);
-        let time_limit_s = b.common.time_limit_s.or(file.defaults.time_limit_s);
+        let max_outer = c.max_outer.or(defaults.max_outer).unwrap_or(2000);
+        let max_inner = c.max_inner.or(defaults.max_inner);
+        let time_limit_s = c.time_limit_s.or(defaults.time_limit_s);
         if let Some(t) = time_limit_s {
             if t.is_nan() || t <= 0.0 {
-                bail!(
-                    "scene block {} ({}): time_limit_s = {t} must be > 0",
-                    bi + 1,
-                    b.name
-                );
+                bail!("{at}: time_limit_s = {t} must be > 0");
             }
             if b.dynamic {
                 bail!(
-                    "scene block {} ({}): time_limit_s applies to static runs only (a dynamic run solves one problem per step)",
-                    bi + 1,
-                    b.name
+                    "{at}: time_limit_s applies to static runs only (a dynamic run solves one problem per step)"
                 );
             }
         }
         if max_outer == 0 || max_inner == Some(0) {
-            bail!(
-                "scene block {} ({}): max_outer and max_inner must be ≥ 1",
-                bi + 1,
-                b.name
-            );
+            bail!("{at}: max_outer and max_inner must be ≥ 1");
         }
-        let reference = b
-            .common
-            .reference
-            .clone()
-            .or_else(|| file.defaults.reference.clone());
+        let reference = c.reference.clone().or_else(|| defaults.reference.clone());
         for be in &backends {
             if !BACKEND_NAMES.contains(&be.as_str()) {
                 bail!(
-                    "scene block {} ({}): unknown backend {be:?} (available: {})",
-                    bi + 1,
-                    b.name,
+                    "{at}: unknown backend {be:?} (available: {})",
                     BACKEND_NAMES.join(", ")
                 );
             }
@@ -420,11 +441,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         let mut accuracy = Vec::new();
         for a in &accs {
             accuracy.push(Accuracy::from_name(a).with_context(|| {
-                format!(
-                    "scene block {} ({}): unknown accuracy {a:?} (expected low, default, high)",
-                    bi + 1,
-                    b.name
-                )
+                format!("{at}: unknown accuracy {a:?} (expected low, default, high)")
             })?);
         }
         if let Some(r) = &reference {
@@ -443,138 +460,156 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                 );
             }
         }
-        let rules = b.eps.as_ref().map(|e| e.to_vec()).unwrap_or_else(|| {
-            vec![EpsRule {
-                c: Some(0.1),
-                p: Some(1.0),
-                fixed: None,
-            }]
-        });
-        for r in &rules {
-            r.check(&b.name)?;
-        }
-        let mut levels = b.n.clone();
-        for &h in &b.h {
-            let n = if b.dynamic {
-                crate::scene::registry::dynamic_n_for_h(&b.name, h, &b.params)
-            } else {
-                crate::scene::registry::n_for_h(&b.name, h, &b.params)
-            };
-            levels.push(n.with_context(|| format!("scene block {} ({})", bi + 1, b.name))?);
-        }
-        let schemes: Vec<Scheme> = b
-            .scheme
-            .as_ref()
-            .map(|s| s.to_vec())
-            .unwrap_or_else(|| vec!["euler".into()])
-            .iter()
-            .map(|s| {
-                Scheme::from_name(s).with_context(|| {
-                    format!(
-                        "scene block {} ({}): scheme {s:?}: expected euler or newmark",
-                        bi + 1,
-                        b.name
-                    )
-                })
-            })
-            .collect::<Result<_>>()?;
-        if b.dynamic && reference.is_some() {
-            bail!(
-                "scene block {} ({}): a reference run is for static sweeps",
-                bi + 1,
-                b.name
-            );
-        }
-        if levels.is_empty() {
-            bail!(
-                "scene block {} ({}): give a list n or a list h",
-                bi + 1,
-                b.name
-            );
-        }
-        for &n in &levels {
-            // building the scene checks its name and parameters and gives h
-            let (h, dyns) = if b.dynamic {
-                let ds =
-                    crate::scene::registry::build_dynamic_scene(&b.name, Some(n), None, &b.params)
-                        .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?;
-                let dts = if b.dt.is_empty() {
-                    vec![ds.dt]
-                } else {
-                    b.dt.clone()
-                };
-                let steps = b.steps.unwrap_or(ds.steps);
-                let mut dyns = Vec::new();
-                for &dt in &dts {
-                    for &scheme in &schemes {
-                        let d = DynamicSettings { dt, steps, scheme };
-                        d.validate().map_err(|e| {
-                            anyhow::anyhow!("scene block {} ({}): {e}", bi + 1, b.name)
-                        })?;
-                        dyns.push(Some(DynamicSpec { dt, steps, scheme }));
-                    }
-                }
-                (ds.scene.h, dyns)
-            } else {
-                let h = build_scene(&b.name, n, None, &b.params)
-                    .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
-                    .h;
-                (h, vec![None])
-            };
-            for rule in &rules {
-                for dy in &dyns {
-                    for be in &backends {
-                        for acc in &accuracy {
-                            let settings = CaseSettings {
-                                backend: be.clone(),
-                                accuracy: *acc,
-                                pruning,
-                                tol_j,
-                                max_outer,
-                                max_inner,
-                                time_limit_s,
-                            };
-                            let mut spec = RunSpec {
-                                key: String::new(),
-                                scene: b.name.clone(),
-                                n,
-                                h,
-                                eps_rule: rule.label(),
-                                eps: rule.eval(h),
-                                params: b.params.clone(),
-                                settings,
-                                reference: reference.clone(),
-                                dynamic: dy.clone(),
-                            };
-                            spec.key = format!(
-                                "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
-                                spec.group_key(),
-                                dy.as_ref().map_or(String::new(), |d| format!(
-                                    "|dt={:?}|steps={}|{}",
-                                    d.dt,
-                                    d.steps,
-                                    d.scheme.as_str()
-                                )),
-                                be,
-                                acc.as_str(),
-                                pruning.as_str(),
-                                tol_j.map_or("preset".into(), |t| format!("{t:?}")),
-                                max_outer,
-                                // only when set, so that keys of sweeps without it stay as they were
-                                max_inner.map_or(String::new(), |k| format!("|inner={k}")),
-                                time_limit_s.map_or(String::new(), |t| format!("|limit={t:?}s"))
-                            );
-                            if !seen.insert(spec.key.clone()) {
-                                bail!("run {} appears twice in the sweep file", spec.key);
-                            }
-                            runs.push(spec);
-                        }
-                    }
-                }
-            }
+        Ok(BlockSettings {
+            backends,
+            accuracy,
+            pruning,
+            tol_j,
+            max_outer,
+            max_inner,
+            time_limit_s,
+            reference,
+        })
+    }
+
+    /// The run of block `b` at level `n` (mesh size `h`) with ε rule `rule`, time stepping
+    /// `dy`, backend `be` and accuracy `acc`, with its key.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        b: &SceneBlock,
+        n: usize,
+        h: f64,
+        rule: &EpsRule,
+        dy: &Option<DynamicSpec>,
+        be: &str,
+        acc: Accuracy,
+    ) -> RunSpec {
+        let settings = CaseSettings {
+            backend: be.to_string(),
+            accuracy: acc,
+            pruning: self.pruning,
+            tol_j: self.tol_j,
+            max_outer: self.max_outer,
+            max_inner: self.max_inner,
+            time_limit_s: self.time_limit_s,
+        };
+        let mut spec = RunSpec {
+            key: String::new(),
+            scene: b.name.clone(),
+            n,
+            h,
+            eps_rule: rule.label(),
+            eps: rule.eval(h),
+            params: b.params.clone(),
+            settings,
+            reference: self.reference.clone(),
+            dynamic: dy.clone(),
+        };
+        spec.key = run_key(&spec);
+        spec
+    }
+}
+
+/// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
+/// backend, accuracy, pruning, tol_J, max_outer, then max_inner and the time limit only when
+/// set, so that the keys of sweeps without them stay as they were.
+fn run_key(spec: &RunSpec) -> String {
+    let s = &spec.settings;
+    format!(
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
+        spec.group_key(),
+        spec.dynamic.as_ref().map_or(String::new(), |d| format!(
+            "|dt={:?}|steps={}|{}",
+            d.dt,
+            d.steps,
+            d.scheme.as_str()
+        )),
+        s.backend,
+        s.accuracy.as_str(),
+        s.pruning.as_str(),
+        s.tol_j.map_or("preset".into(), |t| format!("{t:?}")),
+        s.max_outer,
+        s.max_inner.map_or(String::new(), |k| format!("|inner={k}")),
+        s.time_limit_s
+            .map_or(String::new(), |t| format!("|limit={t:?}s"))
+    )
+}
+
+/// The block's ε rules (default `{ c = 0.1, p = 1 }`), checked.
+fn eps_rules(b: &SceneBlock) -> Result<Vec<EpsRule>> {
+    let rules = b.eps.as_ref().map(|e| e.to_vec()).unwrap_or_else(|| {
+        vec![EpsRule {
+            c: Some(0.1),
+            p: Some(1.0),
+            fixed: None,
+        }]
+    });
+    for r in &rules {
+        r.check(&b.name)?;
+    }
+    Ok(rules)
+}
+
+/// The block's mesh levels: its `n` list, then one level per `h`.
+fn levels(at: &str, b: &SceneBlock) -> Result<Vec<usize>> {
+    let mut levels = b.n.clone();
+    for &h in &b.h {
+        let n = if b.dynamic {
+            crate::scene::registry::dynamic_n_for_h(&b.name, h, &b.params)
+        } else {
+            crate::scene::registry::n_for_h(&b.name, h, &b.params)
+        };
+        levels.push(n.with_context(|| at.to_string())?);
+    }
+    Ok(levels)
+}
+
+/// The block's time-stepping schemes (default euler).
+fn schemes(at: &str, b: &SceneBlock) -> Result<Vec<Scheme>> {
+    b.scheme
+        .as_ref()
+        .map(|s| s.to_vec())
+        .unwrap_or_else(|| vec!["euler".into()])
+        .iter()
+        .map(|s| {
+            Scheme::from_name(s)
+                .with_context(|| format!("{at}: scheme {s:?}: expected euler or newmark"))
+        })
+        .collect()
+}
+
+/// The mesh size of level `n` of block `b` and its time steppings (`[None]` for a static
+/// block). Building the scene checks its name and parameters and gives `h`.
+fn level_variants(
+    at: &str,
+    b: &SceneBlock,
+    n: usize,
+    schemes: &[Scheme],
+) -> Result<(f64, Vec<Option<DynamicSpec>>)> {
+    if !b.dynamic {
+        let h = build_scene(&b.name, n, None, &b.params)
+            .with_context(|| format!("{at}, n = {n}"))?
+            .h;
+        return Ok((h, vec![None]));
+    }
+    let ds = crate::scene::registry::build_dynamic_scene(&b.name, Some(n), None, &b.params)
+        .with_context(|| format!("{at}, n = {n}"))?;
+    let dts = if b.dt.is_empty() {
+        vec![ds.dt]
+    } else {
+        b.dt.clone()
+    };
+    let steps = b.steps.unwrap_or(ds.steps);
+    let mut dyns = Vec::new();
+    for &dt in &dts {
+        for &scheme in schemes {
+            let d = DynamicSettings { dt, steps, scheme };
+            d.validate().map_err(|e| anyhow::anyhow!("{at}: {e}"))?;
+            dyns.push(Some(DynamicSpec { dt, steps, scheme }));
         }
     }
-    Ok(runs)
+    Ok((ds.scene.h, dyns))
 }
 
 /// FNV-1a hash of a key (stable across platforms and Rust versions).
