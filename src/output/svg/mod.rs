@@ -218,6 +218,7 @@ pub fn write_svg(path: &Path, svg: &str) -> io::Result<()> {
 
 #[cfg(test)]
 mod tests {
+    use super::projection::{face_grey, painter_faces, project};
     use super::*;
 
     fn check_wellformed(svg: &str) {

@@ -27,7 +27,7 @@ pub struct Shape3<'a> {
 /// grows towards the viewer); the page axes are `right = (1, 1, 0)/√2` and
 /// `up = (−1, 1, 2)/√6`, so `z` points up on the page and `(right, up, v)` is
 /// right-handed.
-fn project(p: [f64; 3]) -> (f64, f64, f64) {
+pub(super) fn project(p: [f64; 3]) -> (f64, f64, f64) {
     let (s2, s3, s6) = (2f64.sqrt(), 3f64.sqrt(), 6f64.sqrt());
     let right = (p[0] + p[1]) / s2;
     let up = (-p[0] + p[1] + 2.0 * p[2]) / s6;
@@ -73,7 +73,7 @@ type DrawFace = (usize, f64, [[f64; 3]; 3]);
 /// The faces of `s` whose vertices all exist and are finite, in painter's
 /// order: by depth of the centroid along the view direction, far first,
 /// ties broken by face index.
-fn painter_faces(s: &Shape3) -> Vec<DrawFace> {
+pub(super) fn painter_faces(s: &Shape3) -> Vec<DrawFace> {
     let mut faces: Vec<DrawFace> = s
         .faces
         .iter()
@@ -92,7 +92,7 @@ fn painter_faces(s: &Shape3) -> Vec<DrawFace> {
 /// Grey level (0–255) of a face: `|n·v|` (unit normal `n`, view direction
 /// `v`) mapped to 150 (edge-on) … 245 (facing the viewer). Degenerate faces
 /// get the darkest level.
-fn face_grey(v: &[[f64; 3]; 3]) -> u8 {
+pub(super) fn face_grey(v: &[[f64; 3]; 3]) -> u8 {
     let a = [v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]];
     let b = [v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]];
     let n = [
