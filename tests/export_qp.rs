@@ -1,59 +1,53 @@
 //! `contactlab export-qp`: every QPS file it writes is read back by the project's reader and
 //! equals, bit for bit, the QP the run solved (captured in-process by the same deterministic
-//! run).
+//! run). Both the export and the in-process run go through the library (`harness::export`,
+//! `harness::case`), so the test runs the command's own code, not a copy of its settings.
 
 use contactlab::harness::capture::Capture;
-use contactlab::scene::ring::{build, RingParams};
-use contactlab::solve::outer::{run, OuterSettings, Pruning};
+use contactlab::harness::case::{execute_with, CaseSettings};
+use contactlab::harness::export::{cmd_export, ExportArgs};
+use contactlab::scene::registry::build_scene;
+use contactlab::solve::outer::Pruning;
 use contactlab::solve::settings::Accuracy;
 use contactlab_solvers::qps::read_qps_file;
 use contactlab_solvers::{backend_from_name, Qp, QpError, QpSolution};
 use std::path::Path;
-use std::process::Command;
 
 #[test]
 fn exported_qps_files_read_back_to_the_solved_qps() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("export_qp");
     let _ = std::fs::remove_dir_all(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args(["export-qp", "ring", "--n", "20", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-
-    // the same run in-process, with the settings export-qp uses (clarabel, default, lazy)
-    let scene = build(&RingParams {
+    cmd_export(&ExportArgs {
+        scene: "ring".into(),
         n: 20,
-        ..Default::default()
+        eps: None,
+        params: Vec::new(),
+        backend: "clarabel".into(),
+        accuracy: "default".into(),
+        pruning: "lazy".into(),
+        max_outer: 2000,
+        out: dir.clone(),
     })
     .unwrap();
+
+    // the same run in-process, with the settings export-qp uses (clarabel, default, lazy)
+    let scene = build_scene("ring", 20, None, &Default::default()).unwrap();
     let acc = Accuracy::Default;
+    let cs = CaseSettings {
+        backend: "clarabel".into(),
+        accuracy: acc,
+        pruning: Pruning::Lazy,
+        tol_j: None,
+        max_outer: 2000,
+        max_inner: None,
+        time_limit_s: None,
+    };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();
     let mut captured: Vec<Qp> = Vec::new();
     let mut sink = |_: usize, qp: &Qp, _: &Result<QpSolution, QpError>| captured.push(qp.clone());
     {
         let mut cap = Capture::new(inner.as_mut(), &mut sink);
-        let settings = OuterSettings {
-            tol_j: acc.tol_j(),
-            max_outer: 2000,
-            pruning: Pruning::Lazy,
-            ..Default::default()
-        };
-        run(
-            &scene.mesh,
-            &scene.energy,
-            scene.eps,
-            &scene.x0,
-            &mut cap,
-            &settings,
-            &mut |_, _| {},
-        )
-        .unwrap();
+        execute_with(&scene, &cs, &mut cap, &mut |_, _| {}).unwrap();
     }
     let index = std::fs::read_to_string(dir.join("index.csv")).unwrap();
     let files: Vec<String> = index

@@ -15,7 +15,6 @@ use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResul
 use crate::solve::settings::Accuracy;
 use anyhow::Result;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// What a case runs with.
@@ -93,6 +92,22 @@ pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDia
     Ok(last.expect("DIAG_QP_TOLS is not empty"))
 }
 
+/// The outer-loop settings of a case, static or dynamic: the preset's tol_J unless overridden,
+/// max_outer, pruning and max_inner (the time limit is a static run's, set by
+/// [`execute_with`]).
+pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
+    let mut settings = OuterSettings {
+        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+        max_outer: cs.max_outer,
+        pruning: cs.pruning,
+        ..Default::default()
+    };
+    if let Some(k) = cs.max_inner {
+        settings.inner.max_inner = k;
+    }
+    settings
+}
+
 /// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a converged
 /// run.
 pub fn execute(
@@ -114,16 +129,8 @@ pub fn execute_with(
     observer: &mut dyn FnMut(&IterationRecord, &[f64]),
 ) -> Result<CaseOutcome> {
     let qp = cs.accuracy.qp_settings(&cs.backend);
-    let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
-    let mut settings = OuterSettings {
-        tol_j,
-        max_outer: cs.max_outer,
-        pruning: cs.pruning,
-        ..Default::default()
-    };
-    if let Some(k) = cs.max_inner {
-        settings.inner.max_inner = k;
-    }
+    let mut settings = outer_settings(cs);
+    let tol_j = settings.tol_j;
     settings.time_limit_s = cs.time_limit_s;
     let mut records = Vec::new();
     let res = run(
@@ -153,105 +160,6 @@ pub fn execute_with(
         max_inner: settings.inner.max_inner,
         t_diagnostics_s: t.elapsed().as_secs_f64(),
     })
-}
-
-/// The per-run columns of a sweep row (after the case's own columns), as documented in the
-/// README ("Sweeps").
-pub const RUN_COLUMNS: [&str; 33] = [
-    "dim",
-    "h",
-    "eps",
-    "qp_tol",
-    "tol_j",
-    "max_inner",
-    "status",
-    "outer_iterations",
-    "inner_iterations",
-    "backend_iterations",
-    "final_energy",
-    "min_distance",
-    "all_admissible",
-    "energy_monotone",
-    "residual_hm1",
-    "bound",
-    "ratio",
-    "lambda_norm_h",
-    "c_phi",
-    "max_edges_per_vertex",
-    "stationarity_rel",
-    "pairs",
-    "active_rows",
-    "wall_time_s",
-    "t_pairs_s",
-    "t_assembly_s",
-    "t_solve_s",
-    "t_diagnostics_s",
-    "energy_error",
-    "position_error_h1",
-    "max_violation",
-    "reference_energy",
-    "error",
-];
-
-/// Formats a float for CSV (shortest round-trip form; empty when NaN).
-pub fn f(v: f64) -> String {
-    if v.is_nan() {
-        String::new()
-    } else {
-        format!("{v:?}")
-    }
-}
-
-/// The run columns of a finished case ([`RUN_COLUMNS`]; the error columns empty).
-pub fn row_values(scene: &Scene, o: &CaseOutcome) -> BTreeMap<&'static str, String> {
-    let mut m = BTreeMap::new();
-    let r = &o.res;
-    let sum = |g: fn(&IterationRecord) -> f64| o.records.iter().map(g).sum::<f64>();
-    m.insert("dim", scene.mesh.dim.to_string());
-    m.insert("h", f(scene.h));
-    m.insert("eps", f(scene.eps));
-    m.insert("qp_tol", f(o.qp.eps_abs));
-    m.insert("tol_j", f(o.tol_j));
-    m.insert("max_inner", o.max_inner.to_string());
-    m.insert("status", r.status.as_str().to_string());
-    m.insert("outer_iterations", r.outer_iterations.to_string());
-    m.insert("inner_iterations", r.inner_iterations.to_string());
-    m.insert("backend_iterations", r.backend_iterations.to_string());
-    m.insert("final_energy", f(r.energy));
-    m.insert("min_distance", f(r.min_distance.distance));
-    m.insert(
-        "all_admissible",
-        o.records.iter().all(|x| x.admissible).to_string(),
-    );
-    m.insert(
-        "energy_monotone",
-        o.records
-            .windows(2)
-            .all(|w| w[1].energy <= w[0].energy)
-            .to_string(),
-    );
-    if let Some((d, _)) = &o.diagnostics {
-        m.insert("residual_hm1", f(d.residual_hm1));
-        m.insert("bound", f(d.bound));
-        m.insert("ratio", f(d.ratio));
-        m.insert("lambda_norm_h", f(d.lambda_norm_h));
-        m.insert("c_phi", d.c_phi.to_string());
-        m.insert("max_edges_per_vertex", d.max_edges_per_vertex.to_string());
-        m.insert(
-            "stationarity_rel",
-            f(d.stationarity_canonical / d.gradient_norm.max(f64::MIN_POSITIVE)),
-        );
-        m.insert("active_rows", d.active_rows.to_string());
-    } else if let Some(last) = o.records.last() {
-        m.insert("active_rows", last.active_rows.to_string());
-    }
-    m.insert("pairs", o.records.last().map_or(0, |x| x.pairs).to_string());
-    m.insert("wall_time_s", f(r.wall_time_s));
-    m.insert("t_pairs_s", f(sum(|x| x.t_pairs_s)));
-    m.insert("t_assembly_s", f(sum(|x| x.t_assembly_s)));
-    m.insert("t_solve_s", f(sum(|x| x.t_solve_s)));
-    m.insert("t_diagnostics_s", f(o.t_diagnostics_s));
-    m
 }
 
 /// What a dynamic run measured (summary.json and the dynamic sweep rows).
@@ -307,15 +215,7 @@ pub fn execute_dynamic(
     observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
 ) -> Result<(DynamicResult, DynamicMetrics)> {
     let mut backend = backend_from_name(&cs.backend, qp)?;
-    let mut settings = OuterSettings {
-        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
-        max_outer: cs.max_outer,
-        pruning: cs.pruning,
-        ..Default::default()
-    };
-    if let Some(k) = cs.max_inner {
-        settings.inner.max_inner = k;
-    }
+    let settings = outer_settings(cs);
     let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density)?;
     let mut system = System {
         mesh: &ds.scene.mesh,

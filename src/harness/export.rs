@@ -6,7 +6,8 @@
 //! run on contact QPs; `contactlab_solvers::qps::read_qps_file` reads them back.
 
 use crate::harness::capture::Capture;
-use crate::harness::case::{execute_with, f, CaseSettings};
+use crate::harness::case::{execute_with, CaseSettings};
+use crate::harness::rows::{csv_line, header, record_line, QpIndexRow};
 use crate::output::write_atomic;
 use crate::scene::registry::{build_scene, parse_params};
 use crate::solve::outer::Pruning;
@@ -75,10 +76,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
     let index_path = a.out.join("index.csv");
     let mut index =
         std::fs::File::create(&index_path).with_context(|| format!("creating {index_path:?}"))?;
-    writeln!(
-        index,
-        "k,file,variables,rows,nnz_p,nnz_a,status,iterations,objective"
-    )?;
+    index.write_all(&record_line(header::<QpIndexRow>())?)?;
     let mut failure: Option<anyhow::Error> = None;
     let out_dir = a.out.clone();
     let stem = format!("{}_n{}", a.scene, a.n);
@@ -99,17 +97,21 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
                     ),
                     Err(e) => (format!("error: {e}").replace(',', ";"), 0, f64::NAN),
                 };
-                writeln!(
-                    index,
-                    "{k},{file},{},{},{},{},{status},{it},{}",
-                    qp.n(),
-                    qp.m(),
-                    qp.p.nnz(),
-                    qp.a.nnz(),
-                    f(obj)
-                )
-                .and_then(|()| index.flush())
-                .context("writing index.csv")
+                let row = QpIndexRow {
+                    k,
+                    variables: qp.n(),
+                    rows: qp.m(),
+                    nnz_p: qp.p.nnz(),
+                    nnz_a: qp.a.nnz(),
+                    file,
+                    status,
+                    iterations: it,
+                    objective: obj,
+                };
+                csv_line(&row)
+                    .and_then(|line| Ok(index.write_all(&line)?))
+                    .and_then(|()| Ok(index.flush()?))
+                    .context("writing index.csv")
             });
         if let Err(e) = res {
             failure = Some(e);

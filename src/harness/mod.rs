@@ -1,5 +1,6 @@
 //! The harness: one run of a scene and its run directory ([`run`], [`dynamic_run`]), a case
 //! (scene × backend × preset × pruning, diagnosed: [`case`]), sweeps of cases ([`sweep`]),
+//! the rows they write, one struct per kind of row ([`rows`]: where a column is added),
 //! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]) and QP
 //! export ([`export`], [`capture`]).
 //!
@@ -11,6 +12,7 @@ pub mod case;
 pub mod diagnostics;
 pub mod dynamic_run;
 pub mod export;
+pub mod rows;
 pub mod run;
 pub mod scaling;
 pub mod sweep;

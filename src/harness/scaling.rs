@@ -1,4 +1,4 @@
-//! `contactlab scaling`: the scaling experiment of issue 3.
+//! `contactlab scaling`: the scaling experiment (docs/measurements.md).
 //!
 //! For each size `n` (elements per membrane of the balloons scene) and pruning mode, one child
 //! process (`contactlab scaling-case`, so that each case's peak memory is its own) runs either
@@ -9,13 +9,13 @@
 //! case is a row with its status. At the end: a log–log SVG of the time per outer iteration
 //! against the number of vertices, with fitted growth exponents.
 
+use crate::harness::rows::{header, ScalingRow};
 use crate::output::loglog::{loglog_slope, loglog_svg, Series};
 use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::solve::outer::{run, OuterSettings, Pruning, RunStatus};
 use anyhow::{bail, Context, Result};
 use contactlab_solvers::{backend_from_name, default_settings};
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -77,28 +77,6 @@ pub struct CaseArgs {
     #[arg(long)]
     max_inner: usize,
 }
-
-const COLS: [&str; 19] = [
-    "n",
-    "vertices",
-    "pruning",
-    "kind",
-    "trust_delta0",
-    "max_inner",
-    "status",
-    "outer_iterations",
-    "inner_iterations",
-    "pairs",
-    "rows",
-    "t_pairs_s",
-    "t_assembly_s",
-    "t_solve_s",
-    "t_step_s",
-    "wall_time_s",
-    "peak_rss_mb",
-    "final_energy",
-    "backend",
-];
 
 /// Peak resident set size of this process in MiB (`VmHWM`), 0 where unavailable.
 fn peak_rss_mb() -> f64 {
@@ -173,35 +151,28 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
     Ok(())
 }
 
-fn read_rows(path: &Path) -> Result<Vec<BTreeMap<String, String>>> {
+fn read_rows(path: &Path) -> Result<Vec<ScalingRow>> {
     if !path.exists() {
         return Ok(Vec::new());
     }
     let mut rd =
         csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let headers = rd.headers()?.clone();
     let mut rows = Vec::new();
-    for (i, rec) in rd.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: bad row {}", path.display(), i + 2))?;
-        let mut row: BTreeMap<String, String> = headers
-            .iter()
-            .zip(rec.iter())
-            .map(|(h, v)| (h.to_string(), v.to_string()))
-            .collect();
-        // Rows written before these columns existed ran with the defaults.
-        row.entry("trust_delta0".into())
-            .or_insert_with(|| "1".into());
-        row.entry("max_inner".into()).or_insert_with(|| "50".into());
-        rows.push(row);
+    // Rows written before the columns trust_delta0 and max_inner existed ran with the defaults
+    // (ScalingRow's defaults).
+    for (i, rec) in rd.deserialize().enumerate() {
+        rows.push(rec.with_context(|| format!("{}: bad row {}", path.display(), i + 2))?);
     }
     Ok(rows)
 }
 
-fn write_rows(path: &Path, rows: &[BTreeMap<String, String>]) -> Result<()> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(COLS)?;
+fn write_rows(path: &Path, rows: &[ScalingRow]) -> Result<()> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.write_record(header::<ScalingRow>())?;
     for r in rows {
-        w.write_record(COLS.iter().map(|c| r.get(*c).map_or("", |v| v.as_str())))?;
+        w.serialize(r)?;
     }
     write_atomic(path, &w.into_inner()?)?;
     Ok(())
@@ -210,24 +181,18 @@ fn write_rows(path: &Path, rows: &[BTreeMap<String, String>]) -> Result<()> {
 /// A row's key: `(n, pruning, kind, trust_delta0, max_inner)` (the last two as written).
 type Key = (usize, String, String, String, String);
 
-fn key(r: &BTreeMap<String, String>) -> Key {
-    let f = |k: &str| r.get(k).cloned().unwrap_or_default();
+fn key(r: &ScalingRow) -> Key {
     (
-        r.get("n").and_then(|v| v.parse().ok()).unwrap_or(0),
-        f("pruning"),
-        f("kind"),
-        f("trust_delta0"),
-        f("max_inner"),
+        r.n.parse().unwrap_or(0),
+        r.pruning.clone(),
+        r.kind.clone(),
+        r.trust_delta0.clone(),
+        r.max_inner.clone(),
     )
 }
 
 /// Runs one case in a child process with a time limit.
-fn run_case(
-    a: &ScalingArgs,
-    n: usize,
-    mode: &str,
-    max_outer: usize,
-) -> Result<BTreeMap<String, String>> {
+fn run_case(a: &ScalingArgs, n: usize, mode: &str, max_outer: usize) -> Result<ScalingRow> {
     let (backend, timeout) = (a.backend.as_str(), a.case_timeout_s);
     let exe = std::env::current_exe()?;
     let mut child = Command::new(exe)
@@ -250,26 +215,17 @@ fn run_case(
         .stderr(Stdio::piped())
         .spawn()?;
     let start = Instant::now();
-    let fail = |status: String| -> BTreeMap<String, String> {
-        [
-            ("n", n.to_string()),
-            ("pruning", mode.to_string()),
-            (
-                "kind",
-                if max_outer == 1 { "one_step" } else { "full" }.to_string(),
-            ),
-            ("trust_delta0", a.trust_delta0.to_string()),
-            ("max_inner", a.max_inner.to_string()),
-            ("status", status),
-            (
-                "wall_time_s",
-                format!("{:.1}", start.elapsed().as_secs_f64()),
-            ),
-            ("backend", backend.to_string()),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect()
+    let fail = |status: String| ScalingRow {
+        n: n.to_string(),
+        vertices: String::new(),
+        pruning: mode.to_string(),
+        kind: if max_outer == 1 { "one_step" } else { "full" }.to_string(),
+        trust_delta0: a.trust_delta0.to_string(),
+        max_inner: a.max_inner.to_string(),
+        status,
+        wall_time_s: format!("{:.1}", start.elapsed().as_secs_f64()),
+        backend: backend.to_string(),
+        ..ScalingRow::empty()
     };
     loop {
         if let Some(st) = child.try_wait()? {
@@ -284,16 +240,18 @@ fn run_case(
             let obj = v
                 .as_object()
                 .context("scaling-case JSON is not an object")?;
-            return Ok(obj
+            // every cell as the child wrote it (numbers in serde_json's form)
+            let cells: serde_json::Map<String, serde_json::Value> = obj
                 .iter()
                 .map(|(k, v)| {
                     let s = match v {
                         serde_json::Value::String(s) => s.clone(),
                         other => other.to_string(),
                     };
-                    (k.clone(), s)
+                    (k.clone(), serde_json::Value::String(s))
                 })
-                .collect());
+                .collect();
+            return ScalingRow::from_cells(cells);
         }
         if start.elapsed().as_secs_f64() > timeout {
             let _ = child.kill();
@@ -301,6 +259,15 @@ fn run_case(
             return Ok(fail(format!("timeout after {timeout} s")));
         }
         std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// A progress cell: `-` when empty (a failed case has no timings).
+fn or_dash(s: &str) -> &str {
+    if s.is_empty() {
+        "-"
+    } else {
+        s
     }
 }
 
@@ -362,10 +329,10 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         let row = run_case(&a, n, &m, max_outer)?;
         eprintln!(
             "{} (step {} s, wall {} s, peak {} MiB)",
-            row.get("status").map_or("", |s| s.as_str()),
-            row.get("t_step_s").map_or("-", |s| s.as_str()),
-            row.get("wall_time_s").map_or("-", |s| s.as_str()),
-            row.get("peak_rss_mb").map_or("-", |s| s.as_str()),
+            row.status,
+            or_dash(&row.t_step_s),
+            or_dash(&row.wall_time_s),
+            or_dash(&row.peak_rss_mb),
         );
         rows.push(row);
         rows.sort_by_key(key);
@@ -374,21 +341,17 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
     // The picture and the fitted exponents, from every finished one-step row in the CSV.
     let mut series = Vec::new();
     // One series per setting: pruning mode, δ0 (trust region only) and max_inner.
-    let done: Vec<&BTreeMap<String, String>> = rows
+    let done: Vec<&ScalingRow> = rows
         .iter()
-        .filter(|r| {
-            r.get("kind").map(|s| s.as_str()) == Some("one_step")
-                && r.get("status").map(|s| s.as_str()) == Some("one_step_done")
-        })
+        .filter(|r| r.kind == "one_step" && r.status == "one_step_done")
         .collect();
-    let label_of = |r: &BTreeMap<String, String>| {
-        let f = |k: &str| r.get(k).cloned().unwrap_or_default();
-        let mut l = f("pruning");
+    let label_of = |r: &ScalingRow| {
+        let mut l = r.pruning.clone();
         if l == "trust-region" {
-            l += &format!(" δ0={}h", f("trust_delta0"));
+            l += &format!(" δ0={}h", r.trust_delta0);
         }
-        if f("max_inner") != "50" {
-            l += &format!(" inner≤{}", f("max_inner"));
+        if r.max_inner != "50" {
+            l += &format!(" inner≤{}", r.max_inner);
         }
         l
     };
@@ -399,12 +362,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         let pts: Vec<(f64, f64)> = done
             .iter()
             .filter(|r| label_of(r) == m)
-            .filter_map(|r| {
-                Some((
-                    r.get("vertices")?.parse().ok()?,
-                    r.get("t_step_s")?.parse().ok()?,
-                ))
-            })
+            .filter_map(|r| Some((r.vertices.parse().ok()?, r.t_step_s.parse().ok()?)))
             .collect();
         let slope = loglog_slope(&pts);
         let label = match slope {

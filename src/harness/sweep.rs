@@ -1,6 +1,6 @@
 //! `contactlab sweep FILE.toml --out FILE.csv [--jobs N] [--shard K/N] [--resume]`: expands a
 //! sweep file into runs, executes them in parallel and writes one CSV row per run, flushed as
-//! each run ends (README, "Sweeps").
+//! each run ends (docs/sweeps.md).
 //!
 //! Guarantees (tested in `tests/sweep.rs`):
 //! - a row is written and flushed as soon as its run ends, so an interrupted sweep loses no
@@ -13,8 +13,11 @@
 //!   message in `error`, never an abort of the sweep;
 //! - a sweep that ends with every run present rewrites its CSV in the sweep file's order.
 
-use crate::harness::case::{self, f, CaseSettings, RUN_COLUMNS};
+use crate::harness::case::{self, CaseSettings};
 use crate::harness::diagnostics::h1_distance;
+use crate::harness::rows::{
+    csv_line, header, record_line, CaseColumns, DynamicRow, RunRow, StaticRow,
+};
 use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
@@ -295,59 +298,14 @@ impl RunSpec {
     }
 }
 
-/// The case columns that precede [`RUN_COLUMNS`].
-pub const CASE_COLUMNS: [&str; 8] = [
-    "key", "scene", "n", "eps_rule", "params", "backend", "accuracy", "pruning",
-];
-
-/// The full header of a sweep CSV.
-pub fn header() -> Vec<&'static str> {
-    CASE_COLUMNS
-        .iter()
-        .chain(RUN_COLUMNS.iter())
-        .copied()
-        .collect()
+/// The header of a static sweep's CSV: [`CaseColumns`] then [`StaticRow`].
+pub fn header_static() -> Vec<String> {
+    header::<(CaseColumns, StaticRow)>()
 }
 
-/// The columns of a dynamic run's row, after [`CASE_COLUMNS`] (DYNAMICS_NOTES.md).
-pub const DYNAMIC_COLUMNS: [&str; 28] = [
-    "dim",
-    "h",
-    "eps",
-    "dt",
-    "steps",
-    "scheme",
-    "qp_tol",
-    "tol_j",
-    "status",
-    "steps_taken",
-    "steps_max_outer",
-    "all_admissible",
-    "min_distance",
-    "initial_energy",
-    "final_energy",
-    "final_kinetic",
-    "max_energy_increase",
-    "energy_drift",
-    "momentum_error",
-    "force_mean_rest",
-    "force_jump_rest",
-    "force_std_rest",
-    "weight_ratio_rest",
-    "outer_iterations",
-    "max_outer_per_step",
-    "wall_time_s",
-    "t_total_s",
-    "error",
-];
-
-/// The header of a dynamic sweep's CSV.
-pub fn dynamic_header() -> Vec<&'static str> {
-    CASE_COLUMNS
-        .iter()
-        .chain(DYNAMIC_COLUMNS.iter())
-        .copied()
-        .collect()
+/// The header of a dynamic sweep's CSV: [`CaseColumns`] then [`DynamicRow`].
+pub fn header_dynamic() -> Vec<String> {
+    header::<(CaseColumns, DynamicRow)>()
 }
 
 /// Reads and validates a sweep file, and expands it into runs in file order (scene block, n,
@@ -365,10 +323,45 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
     if file.scene.is_empty() {
         bail!("no [[scene]] block");
     }
+    check_one_kind(&file.scene)?;
     let mut runs = Vec::new();
     let mut seen = BTreeSet::new();
-    let dynamic = file.scene[0].dynamic;
-    if let Some(b) = file.scene.iter().find(|b| b.dynamic != dynamic) {
+    for (bi, b) in file.scene.iter().enumerate() {
+        let at = format!("scene block {} ({})", bi + 1, b.name);
+        let s = BlockSettings::resolve(bi, b, &file.defaults)?;
+        let rules = eps_rules(b)?;
+        let levels = levels(&at, b)?;
+        let schemes = schemes(&at, b)?;
+        if b.dynamic && s.reference.is_some() {
+            bail!("{at}: a reference run is for static sweeps");
+        }
+        if levels.is_empty() {
+            bail!("{at}: give a list n or a list h");
+        }
+        for &n in &levels {
+            let (h, dyns) = level_variants(&at, b, n, &schemes)?;
+            for rule in &rules {
+                for dy in &dyns {
+                    for be in &s.backends {
+                        for acc in &s.accuracy {
+                            let spec = s.run(b, n, h, rule, dy, be, *acc);
+                            if !seen.insert(spec.key.clone()) {
+                                bail!("run {} appears twice in the sweep file", spec.key);
+                            }
+                            runs.push(spec);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(runs)
+}
+
+/// A sweep file is all static or all dynamic (the two kinds of row have different columns).
+fn check_one_kind(blocks: &[SceneBlock]) -> Result<()> {
+    let dynamic = blocks[0].dynamic;
+    if let Some(b) = blocks.iter().find(|b| b.dynamic != dynamic) {
         bail!(
             "scene block {:?} has dynamic = {} but the first block has dynamic = {dynamic}: a \
              sweep file is all static or all dynamic (their CSVs have different columns)",
@@ -376,85 +369,71 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             b.dynamic
         );
     }
-    for (bi, b) in file.scene.iter().enumerate() {
+    Ok(())
+}
+
+/// The settings of a scene block, its own or the file's defaults, checked.
+struct BlockSettings {
+    backends: Vec<String>,
+    accuracy: Vec<Accuracy>,
+    pruning: Pruning,
+    tol_j: Option<f64>,
+    max_outer: usize,
+    max_inner: Option<usize>,
+    time_limit_s: Option<f64>,
+    reference: Option<ReferenceSpec>,
+}
+
+impl BlockSettings {
+    /// Block `bi`'s settings, every name and value checked.
+    fn resolve(bi: usize, b: &SceneBlock, defaults: &Common) -> Result<BlockSettings> {
+        let at = format!("scene block {} ({})", bi + 1, b.name);
         if !b.dynamic && (!b.dt.is_empty() || b.steps.is_some() || b.scheme.is_some()) {
-            bail!(
-                "scene block {} ({}): dt, steps and scheme need dynamic = true",
-                bi + 1,
-                b.name
-            );
+            bail!("{at}: dt, steps and scheme need dynamic = true");
         }
         let pick = |o: &Option<Vec<String>>, d: &Option<Vec<String>>, dflt: &str| {
             o.clone()
                 .or_else(|| d.clone())
                 .unwrap_or_else(|| vec![dflt.to_string()])
         };
-        let backends = pick(&b.common.backends, &file.defaults.backends, "clarabel");
-        let accs = pick(&b.common.accuracy, &file.defaults.accuracy, "default");
-        let pruning_name = b
-            .common
+        let c = &b.common;
+        let backends = pick(&c.backends, &defaults.backends, "clarabel");
+        let accs = pick(&c.accuracy, &defaults.accuracy, "default");
+        let pruning_name = c
             .pruning
             .clone()
-            .or_else(|| file.defaults.pruning.clone())
+            .or_else(|| defaults.pruning.clone())
             .unwrap_or_else(|| "lazy".into());
         let pruning = Pruning::from_name(&pruning_name).with_context(|| {
-            format!(
-                "scene block {} ({}): pruning {pruning_name:?}: expected lazy, trust-region or all-pairs",
-                bi + 1,
-                b.name
-            )
+            format!("{at}: pruning {pruning_name:?}: expected lazy, trust-region or all-pairs")
         })?;
-        let tol_j = b.common.tol_j.or(file.defaults.tol_j);
+        let tol_j = c.tol_j.or(defaults.tol_j);
         if let Some(t) = tol_j {
             if !(t > 0.0 && t.is_finite()) {
-                bail!(
-                    "scene block {} ({}): tol_j = {t} must be finite and > 0",
-                    bi + 1,
-                    b.name
-                );
+                bail!("{at}: tol_j = {t} must be finite and > 0");
             }
         }
-        let max_outer = b
-            .common
-            .max_outer
-            .or(file.defaults.max_outer)
-            .unwrap_or(2000);
-        let max_inner = b.common.max_inner.or(file.defaults.max_inner);
-        let time_limit_s = b.common.time_limit_s.or(file.defaults.time_limit_s);
+        let max_outer = c.max_outer.or(defaults.max_outer).unwrap_or(2000);
+        let max_inner = c.max_inner.or(defaults.max_inner);
+        let time_limit_s = c.time_limit_s.or(defaults.time_limit_s);
         if let Some(t) = time_limit_s {
             if t.is_nan() || t <= 0.0 {
-                bail!(
-                    "scene block {} ({}): time_limit_s = {t} must be > 0",
-                    bi + 1,
-                    b.name
-                );
+                bail!("{at}: time_limit_s = {t} must be > 0");
             }
             if b.dynamic {
                 bail!(
-                    "scene block {} ({}): time_limit_s applies to static runs only (a dynamic run solves one problem per step)",
-                    bi + 1,
-                    b.name
+                    "{at}: time_limit_s applies to static runs only (a dynamic run solves one problem per step)"
                 );
             }
         }
         if max_outer == 0 || max_inner == Some(0) {
-            bail!(
-                "scene block {} ({}): max_outer and max_inner must be ≥ 1",
-                bi + 1,
-                b.name
-            );
+            bail!("{at}: max_outer and max_inner must be ≥ 1");
         }
-        let reference = b
-            .common
-            .reference
-            .clone()
-            .or_else(|| file.defaults.reference.clone());
+        let reference = c.reference.clone().or_else(|| defaults.reference.clone());
         for be in &backends {
             if !BACKEND_NAMES.contains(&be.as_str()) {
                 bail!(
-                    "scene block {} ({}): unknown backend {be:?} (available: {})",
-                    bi + 1,
-                    b.name,
+                    "{at}: unknown backend {be:?} (available: {})",
                     BACKEND_NAMES.join(", ")
                 );
             }
@@ -462,11 +441,7 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
         let mut accuracy = Vec::new();
         for a in &accs {
             accuracy.push(Accuracy::from_name(a).with_context(|| {
-                format!(
-                    "scene block {} ({}): unknown accuracy {a:?} (expected low, default, high)",
-                    bi + 1,
-                    b.name
-                )
+                format!("{at}: unknown accuracy {a:?} (expected low, default, high)")
             })?);
         }
         if let Some(r) = &reference {
@@ -485,138 +460,156 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
                 );
             }
         }
-        let rules = b.eps.as_ref().map(|e| e.to_vec()).unwrap_or_else(|| {
-            vec![EpsRule {
-                c: Some(0.1),
-                p: Some(1.0),
-                fixed: None,
-            }]
-        });
-        for r in &rules {
-            r.check(&b.name)?;
-        }
-        let mut levels = b.n.clone();
-        for &h in &b.h {
-            let n = if b.dynamic {
-                crate::scene::registry::dynamic_n_for_h(&b.name, h, &b.params)
-            } else {
-                crate::scene::registry::n_for_h(&b.name, h, &b.params)
-            };
-            levels.push(n.with_context(|| format!("scene block {} ({})", bi + 1, b.name))?);
-        }
-        let schemes: Vec<Scheme> = b
-            .scheme
-            .as_ref()
-            .map(|s| s.to_vec())
-            .unwrap_or_else(|| vec!["euler".into()])
-            .iter()
-            .map(|s| {
-                Scheme::from_name(s).with_context(|| {
-                    format!(
-                        "scene block {} ({}): scheme {s:?}: expected euler or newmark",
-                        bi + 1,
-                        b.name
-                    )
-                })
-            })
-            .collect::<Result<_>>()?;
-        if b.dynamic && reference.is_some() {
-            bail!(
-                "scene block {} ({}): a reference run is for static sweeps",
-                bi + 1,
-                b.name
-            );
-        }
-        if levels.is_empty() {
-            bail!(
-                "scene block {} ({}): give a list n or a list h",
-                bi + 1,
-                b.name
-            );
-        }
-        for &n in &levels {
-            // building the scene checks its name and parameters and gives h
-            let (h, dyns) = if b.dynamic {
-                let ds =
-                    crate::scene::registry::build_dynamic_scene(&b.name, Some(n), None, &b.params)
-                        .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?;
-                let dts = if b.dt.is_empty() {
-                    vec![ds.dt]
-                } else {
-                    b.dt.clone()
-                };
-                let steps = b.steps.unwrap_or(ds.steps);
-                let mut dyns = Vec::new();
-                for &dt in &dts {
-                    for &scheme in &schemes {
-                        let d = DynamicSettings { dt, steps, scheme };
-                        d.validate().map_err(|e| {
-                            anyhow::anyhow!("scene block {} ({}): {e}", bi + 1, b.name)
-                        })?;
-                        dyns.push(Some(DynamicSpec { dt, steps, scheme }));
-                    }
-                }
-                (ds.scene.h, dyns)
-            } else {
-                let h = build_scene(&b.name, n, None, &b.params)
-                    .with_context(|| format!("scene block {} ({}), n = {n}", bi + 1, b.name))?
-                    .h;
-                (h, vec![None])
-            };
-            for rule in &rules {
-                for dy in &dyns {
-                    for be in &backends {
-                        for acc in &accuracy {
-                            let settings = CaseSettings {
-                                backend: be.clone(),
-                                accuracy: *acc,
-                                pruning,
-                                tol_j,
-                                max_outer,
-                                max_inner,
-                                time_limit_s,
-                            };
-                            let mut spec = RunSpec {
-                                key: String::new(),
-                                scene: b.name.clone(),
-                                n,
-                                h,
-                                eps_rule: rule.label(),
-                                eps: rule.eval(h),
-                                params: b.params.clone(),
-                                settings,
-                                reference: reference.clone(),
-                                dynamic: dy.clone(),
-                            };
-                            spec.key = format!(
-                                "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
-                                spec.group_key(),
-                                dy.as_ref().map_or(String::new(), |d| format!(
-                                    "|dt={:?}|steps={}|{}",
-                                    d.dt,
-                                    d.steps,
-                                    d.scheme.as_str()
-                                )),
-                                be,
-                                acc.as_str(),
-                                pruning.as_str(),
-                                tol_j.map_or("preset".into(), |t| format!("{t:?}")),
-                                max_outer,
-                                // only when set, so that keys of sweeps without it stay as they were
-                                max_inner.map_or(String::new(), |k| format!("|inner={k}")),
-                                time_limit_s.map_or(String::new(), |t| format!("|limit={t:?}s"))
-                            );
-                            if !seen.insert(spec.key.clone()) {
-                                bail!("run {} appears twice in the sweep file", spec.key);
-                            }
-                            runs.push(spec);
-                        }
-                    }
-                }
-            }
+        Ok(BlockSettings {
+            backends,
+            accuracy,
+            pruning,
+            tol_j,
+            max_outer,
+            max_inner,
+            time_limit_s,
+            reference,
+        })
+    }
+
+    /// The run of block `b` at level `n` (mesh size `h`) with ε rule `rule`, time stepping
+    /// `dy`, backend `be` and accuracy `acc`, with its key.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        b: &SceneBlock,
+        n: usize,
+        h: f64,
+        rule: &EpsRule,
+        dy: &Option<DynamicSpec>,
+        be: &str,
+        acc: Accuracy,
+    ) -> RunSpec {
+        let settings = CaseSettings {
+            backend: be.to_string(),
+            accuracy: acc,
+            pruning: self.pruning,
+            tol_j: self.tol_j,
+            max_outer: self.max_outer,
+            max_inner: self.max_inner,
+            time_limit_s: self.time_limit_s,
+        };
+        let mut spec = RunSpec {
+            key: String::new(),
+            scene: b.name.clone(),
+            n,
+            h,
+            eps_rule: rule.label(),
+            eps: rule.eval(h),
+            params: b.params.clone(),
+            settings,
+            reference: self.reference.clone(),
+            dynamic: dy.clone(),
+        };
+        spec.key = run_key(&spec);
+        spec
+    }
+}
+
+/// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
+/// backend, accuracy, pruning, tol_J, max_outer, then max_inner and the time limit only when
+/// set, so that the keys of sweeps without them stay as they were.
+fn run_key(spec: &RunSpec) -> String {
+    let s = &spec.settings;
+    format!(
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
+        spec.group_key(),
+        spec.dynamic.as_ref().map_or(String::new(), |d| format!(
+            "|dt={:?}|steps={}|{}",
+            d.dt,
+            d.steps,
+            d.scheme.as_str()
+        )),
+        s.backend,
+        s.accuracy.as_str(),
+        s.pruning.as_str(),
+        s.tol_j.map_or("preset".into(), |t| format!("{t:?}")),
+        s.max_outer,
+        s.max_inner.map_or(String::new(), |k| format!("|inner={k}")),
+        s.time_limit_s
+            .map_or(String::new(), |t| format!("|limit={t:?}s"))
+    )
+}
+
+/// The block's ε rules (default `{ c = 0.1, p = 1 }`), checked.
+fn eps_rules(b: &SceneBlock) -> Result<Vec<EpsRule>> {
+    let rules = b.eps.as_ref().map(|e| e.to_vec()).unwrap_or_else(|| {
+        vec![EpsRule {
+            c: Some(0.1),
+            p: Some(1.0),
+            fixed: None,
+        }]
+    });
+    for r in &rules {
+        r.check(&b.name)?;
+    }
+    Ok(rules)
+}
+
+/// The block's mesh levels: its `n` list, then one level per `h`.
+fn levels(at: &str, b: &SceneBlock) -> Result<Vec<usize>> {
+    let mut levels = b.n.clone();
+    for &h in &b.h {
+        let n = if b.dynamic {
+            crate::scene::registry::dynamic_n_for_h(&b.name, h, &b.params)
+        } else {
+            crate::scene::registry::n_for_h(&b.name, h, &b.params)
+        };
+        levels.push(n.with_context(|| at.to_string())?);
+    }
+    Ok(levels)
+}
+
+/// The block's time-stepping schemes (default euler).
+fn schemes(at: &str, b: &SceneBlock) -> Result<Vec<Scheme>> {
+    b.scheme
+        .as_ref()
+        .map(|s| s.to_vec())
+        .unwrap_or_else(|| vec!["euler".into()])
+        .iter()
+        .map(|s| {
+            Scheme::from_name(s)
+                .with_context(|| format!("{at}: scheme {s:?}: expected euler or newmark"))
+        })
+        .collect()
+}
+
+/// The mesh size of level `n` of block `b` and its time steppings (`[None]` for a static
+/// block). Building the scene checks its name and parameters and gives `h`.
+fn level_variants(
+    at: &str,
+    b: &SceneBlock,
+    n: usize,
+    schemes: &[Scheme],
+) -> Result<(f64, Vec<Option<DynamicSpec>>)> {
+    if !b.dynamic {
+        let h = build_scene(&b.name, n, None, &b.params)
+            .with_context(|| format!("{at}, n = {n}"))?
+            .h;
+        return Ok((h, vec![None]));
+    }
+    let ds = crate::scene::registry::build_dynamic_scene(&b.name, Some(n), None, &b.params)
+        .with_context(|| format!("{at}, n = {n}"))?;
+    let dts = if b.dt.is_empty() {
+        vec![ds.dt]
+    } else {
+        b.dt.clone()
+    };
+    let steps = b.steps.unwrap_or(ds.steps);
+    let mut dyns = Vec::new();
+    for &dt in &dts {
+        for &scheme in schemes {
+            let d = DynamicSettings { dt, steps, scheme };
+            d.validate().map_err(|e| anyhow::anyhow!("{at}: {e}"))?;
+            dyns.push(Some(DynamicSpec { dt, steps, scheme }));
         }
     }
-    Ok(runs)
+    Ok((ds.scene.h, dyns))
 }
 
 /// FNV-1a hash of a key (stable across platforms and Rust versions).
@@ -646,7 +639,7 @@ struct Reference {
 
 /// Reads the rows already in `path` (for --resume): the keys, after dropping a torn last line
 /// (one without its newline, left by a kill during a write). Errors when the header differs.
-fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
+fn existing_keys(path: &Path, want: &[String]) -> Result<BTreeSet<String>> {
     let mut bytes = std::fs::read(path).with_context(|| format!("reading {path:?}"))?;
     if let Some(end) = bytes.iter().rposition(|&b| b == b'\n') {
         if end + 1 < bytes.len() {
@@ -685,42 +678,35 @@ fn existing_keys(path: &Path, want: &[&str]) -> Result<BTreeSet<String>> {
     Ok(keys)
 }
 
-/// The row of a run's outcome: its values, or an `error` or `panic` row with the message.
-fn outcome_row(
-    out: std::thread::Result<Result<BTreeMap<&'static str, String>>>,
-) -> BTreeMap<&'static str, String> {
-    let (status, error) = match out {
-        Ok(Ok(m)) => return m,
-        Ok(Err(e)) => ("error", format!("{e:#}")),
-        Err(p) => (
+/// The row of a run: `run`'s row, or an `error` or `panic` row with the message (a panic is
+/// caught, so one bad run never aborts the sweep).
+fn catch_row<R: RunRow>(run: impl FnOnce() -> Result<R>) -> R {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)) {
+        Ok(Ok(row)) => row,
+        Ok(Err(e)) => R::failed("error", format!("{e:#}")),
+        Err(p) => R::failed(
             "panic",
             p.downcast_ref::<String>()
                 .cloned()
                 .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_else(|| "panic".into()),
         ),
-    };
-    BTreeMap::from([("status", status.to_string()), ("error", error)])
+    }
 }
 
-/// Runs one spec into its row (never panics: a panic becomes a `panic` row).
-fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static str, String> {
+/// Runs one static spec into its row (never panics: a panic becomes a `panic` row).
+fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> StaticRow {
     let t = Instant::now();
-    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+    let mut row = catch_row(|| -> Result<_> {
         let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
         let o = case::execute(&scene, &spec.settings, &mut |_, _| {})?;
-        let mut m = case::row_values(&scene, &o);
+        let mut row = StaticRow::of_case(&scene, &o);
         if let Some(r) = reference {
-            m.insert("reference_energy", f(r.energy));
+            row.reference_energy = Some(r.energy);
             if r.status == "converged" {
-                m.insert(
-                    "energy_error",
-                    f((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE)),
-                );
-                m.insert(
-                    "position_error_h1",
-                    f(h1_distance(&scene.mesh, &o.res.x, &r.x)),
-                );
+                row.energy_error =
+                    Some((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE));
+                row.position_error_h1 = Some(h1_distance(&scene.mesh, &o.res.x, &r.x));
             }
         }
         let worst = o
@@ -728,22 +714,20 @@ fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> BTreeMap<&'static s
             .iter()
             .map(|r| r.min_distance)
             .fold(f64::INFINITY, f64::min);
-        m.insert("max_violation", f((scene.eps - worst).max(0.0)));
-        Ok(m)
-    }));
-    let mut m = outcome_row(out);
-    m.entry("h").or_insert_with(|| f(spec.h));
-    m.entry("eps").or_insert_with(|| f(spec.eps));
-    m.entry("wall_time_s")
-        .or_insert_with(|| f(t.elapsed().as_secs_f64()));
-    m
+        row.max_violation = Some((scene.eps - worst).max(0.0));
+        Ok(row)
+    });
+    row.h.get_or_insert(spec.h);
+    row.eps.get_or_insert(spec.eps);
+    row.wall_time_s.get_or_insert(t.elapsed().as_secs_f64());
+    row
 }
 
 /// Runs one dynamic spec into its row (never panics: a panic becomes a `panic` row).
-fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
+fn run_one_dynamic(spec: &RunSpec) -> DynamicRow {
     let t = Instant::now();
     let d = spec.dynamic.as_ref().expect("a dynamic spec");
-    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| -> Result<_> {
+    let mut row = catch_row(|| -> Result<_> {
         let mut ds = crate::scene::registry::build_dynamic_scene(
             &spec.scene,
             Some(spec.n),
@@ -763,51 +747,25 @@ fn run_one_dynamic(spec: &RunSpec) -> BTreeMap<&'static str, String> {
             &qp,
             &mut |_, _, _| {},
         )?;
-        let mut m = BTreeMap::new();
-        m.insert("dim", ds.scene.mesh.dim.to_string());
-        m.insert("h", f(ds.scene.h));
-        m.insert("eps", f(ds.scene.eps));
-        m.insert("qp_tol", f(qp.eps_abs));
-        m.insert(
-            "tol_j",
-            f(spec
-                .settings
-                .tol_j
-                .unwrap_or(spec.settings.accuracy.tol_j())),
-        );
-        m.insert("status", mt.status.clone());
-        m.insert("steps_taken", mt.steps_taken.to_string());
-        m.insert("steps_max_outer", mt.steps_max_outer.to_string());
-        m.insert("all_admissible", mt.all_admissible.to_string());
-        m.insert("min_distance", f(mt.min_distance));
-        m.insert("initial_energy", f(mt.initial_energy));
-        m.insert("final_energy", f(mt.final_energy));
-        m.insert("final_kinetic", f(mt.final_kinetic));
-        m.insert("max_energy_increase", f(mt.max_energy_increase));
-        m.insert("energy_drift", f(mt.energy_drift));
-        m.insert("momentum_error", mt.momentum_error.map_or(String::new(), f));
-        if let Some(r) = &mt.rest {
-            m.insert("force_mean_rest", f(r.mean));
-            m.insert("force_jump_rest", f(r.max_jump_rel));
-            m.insert("force_std_rest", f(r.std_rel));
-            if matches!(spec.scene.as_str(), "drop" | "drop3d") {
-                let g = spec.params.get("g").copied().unwrap_or(9.81);
-                m.insert("weight_ratio_rest", f(r.mean / (mt.free_mass * g)));
-            }
-        }
-        m.insert("outer_iterations", mt.outer_iterations.to_string());
-        m.insert("max_outer_per_step", mt.max_outer_per_step.to_string());
-        m.insert("wall_time_s", f(mt.wall_time_s));
-        Ok(m)
-    }));
-    let mut m = outcome_row(out);
-    m.insert("dt", f(d.dt));
-    m.insert("steps", d.steps.to_string());
-    m.insert("scheme", d.scheme.as_str().to_string());
-    m.entry("h").or_insert_with(|| f(spec.h));
-    m.entry("eps").or_insert_with(|| f(spec.eps));
-    m.insert("t_total_s", f(t.elapsed().as_secs_f64()));
-    m
+        let g = matches!(spec.scene.as_str(), "drop" | "drop3d")
+            .then(|| spec.params.get("g").copied().unwrap_or(9.81));
+        Ok(DynamicRow::of_metrics(
+            ds.scene.mesh.dim,
+            ds.scene.h,
+            ds.scene.eps,
+            qp.eps_abs,
+            &spec.settings,
+            &mt,
+            g,
+        ))
+    });
+    row.dt = d.dt;
+    row.steps = d.steps;
+    row.scheme = d.scheme.as_str().to_string();
+    row.h.get_or_insert(spec.h);
+    row.eps.get_or_insert(spec.eps);
+    row.t_total_s = Some(t.elapsed().as_secs_f64());
+    row
 }
 
 /// Solves the reference of a group.
@@ -832,10 +790,20 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
     })
 }
 
-fn csv_line(values: &[String]) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(values)?;
-    w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))
+impl RunSpec {
+    /// The case columns of this run's row.
+    fn case_columns(&self) -> CaseColumns {
+        CaseColumns {
+            key: self.key.clone(),
+            scene: self.scene.clone(),
+            n: self.n,
+            eps_rule: self.eps_rule.clone(),
+            params: self.params_label(),
+            backend: self.settings.backend.clone(),
+            accuracy: self.settings.accuracy.as_str().to_string(),
+            pruning: self.settings.pruning.as_str().to_string(),
+        }
+    }
 }
 
 /// `contactlab sweep`.
@@ -844,8 +812,6 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         bail!("--jobs 0: need at least one job");
     }
     let runs = load(&a.file)?;
-    let dynamic = runs.first().is_some_and(|r| r.dynamic.is_some());
-    let hdr_cols = if dynamic { dynamic_header() } else { header() };
     if a.list {
         for r in &runs {
             if in_shard(&r.key, a.shard) {
@@ -854,6 +820,21 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         }
         return Ok(());
     }
+    if runs.first().is_some_and(|r| r.dynamic.is_some()) {
+        sweep_rows(a, &runs, |r, _| run_one_dynamic(r))
+    } else {
+        sweep_rows(a, &runs, run_one)
+    }
+}
+
+/// Runs the pending runs of `runs` (this shard's, not yet in `--out`) and appends one row of
+/// type `R` each, built by `run_one` from the spec and its group's reference.
+fn sweep_rows<R: RunRow>(
+    a: &SweepArgs,
+    runs: &[RunSpec],
+    run_one: impl Fn(&RunSpec, Option<&Reference>) -> R + Sync,
+) -> Result<()> {
+    let hdr_cols = header::<(CaseColumns, R)>();
     let done = if a.out.exists() {
         if !a.resume {
             bail!(
@@ -882,8 +863,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         .open(&a.out)
         .with_context(|| format!("opening {:?}", a.out))?;
     if file.metadata()?.len() == 0 {
-        let hdr: Vec<String> = hdr_cols.iter().map(|s| s.to_string()).collect();
-        file.write_all(&csv_line(&hdr)?)?;
+        file.write_all(&record_line(&hdr_cols)?)?;
         file.flush()?;
     }
     let name = a.file.display().to_string();
@@ -904,15 +884,63 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         .num_threads(a.jobs)
         .build()
         .context("building the thread pool")?;
-    // references: one per group with pending runs, solved first (in parallel)
+    let refs = solve_references(a, &pool, &todo);
+    let t0 = Instant::now();
+    let writer = Mutex::new((file, 0usize));
+    let total = todo.len();
+    let result: Result<()> = pool.install(|| {
+        todo.par_iter().try_for_each(|r| -> Result<()> {
+            let row = run_one(r, refs.get(&r.group_key()));
+            let line = csv_line(&(r.case_columns(), &row))?;
+            let mut g = writer.lock().unwrap_or_else(|e| e.into_inner());
+            g.0.write_all(&line)?;
+            g.0.flush()?;
+            g.1 += 1;
+            if !a.quiet {
+                eprintln!(
+                    "[{}/{} {:.0}s] {} {} {} s",
+                    g.1,
+                    total,
+                    t0.elapsed().as_secs_f64(),
+                    r.key,
+                    row.status(),
+                    row.wall_time_cell(),
+                );
+            }
+            if a.stop_after == Some(g.1) {
+                g.0.sync_all()?;
+                std::process::exit(3);
+            }
+            Ok(())
+        })
+    });
+    result?;
+    drop(writer);
+    // complete: rewrite in the sweep file's order
+    let present = existing_keys(&a.out, &hdr_cols)?;
+    if mine.iter().all(|r| present.contains(&r.key)) {
+        sort_csv(&a.out, &mine)?;
+    }
+    if !a.quiet {
+        eprintln!("sweep {name}: done, {:?}", a.out);
+    }
+    Ok(())
+}
+
+/// The references: one per group with pending runs that asks for one, solved first (in
+/// parallel); a failed reference leaves its group's error columns empty.
+fn solve_references(
+    a: &SweepArgs,
+    pool: &rayon::ThreadPool,
+    todo: &[&RunSpec],
+) -> HashMap<String, Reference> {
     let mut groups: BTreeMap<String, &RunSpec> = BTreeMap::new();
-    for r in &todo {
+    for r in todo {
         if r.reference.is_some() {
             groups.entry(r.group_key()).or_insert(r);
         }
     }
-    let t0 = Instant::now();
-    let refs: HashMap<String, Reference> = pool.install(|| {
+    pool.install(|| {
         groups
             .par_iter()
             .filter_map(|(g, r)| {
@@ -937,62 +965,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
                 }
             })
             .collect()
-    });
-    let writer = Mutex::new((file, 0usize));
-    let total = todo.len();
-    let result: Result<()> = pool.install(|| {
-        todo.par_iter().try_for_each(|r| -> Result<()> {
-            let mut m = if dynamic {
-                run_one_dynamic(r)
-            } else {
-                run_one(r, refs.get(&r.group_key()))
-            };
-            m.insert("key", r.key.clone());
-            m.insert("scene", r.scene.clone());
-            m.insert("n", r.n.to_string());
-            m.insert("eps_rule", r.eps_rule.clone());
-            m.insert("params", r.params_label());
-            m.insert("backend", r.settings.backend.clone());
-            m.insert("accuracy", r.settings.accuracy.as_str().to_string());
-            m.insert("pruning", r.settings.pruning.as_str().to_string());
-            let values: Vec<String> = hdr_cols
-                .iter()
-                .map(|c| m.get(c).cloned().unwrap_or_default())
-                .collect();
-            let line = csv_line(&values)?;
-            let mut g = writer.lock().unwrap_or_else(|e| e.into_inner());
-            g.0.write_all(&line)?;
-            g.0.flush()?;
-            g.1 += 1;
-            if !a.quiet {
-                eprintln!(
-                    "[{}/{} {:.0}s] {} {} {} s",
-                    g.1,
-                    total,
-                    t0.elapsed().as_secs_f64(),
-                    r.key,
-                    m.get("status").map_or("", |s| s.as_str()),
-                    m.get("wall_time_s").map_or("", |s| s.as_str()),
-                );
-            }
-            if a.stop_after == Some(g.1) {
-                g.0.sync_all()?;
-                std::process::exit(3);
-            }
-            Ok(())
-        })
-    });
-    result?;
-    drop(writer);
-    // complete: rewrite in the sweep file's order
-    let present = existing_keys(&a.out, &hdr_cols)?;
-    if mine.iter().all(|r| present.contains(&r.key)) {
-        sort_csv(&a.out, &mine)?;
-    }
-    if !a.quiet {
-        eprintln!("sweep {name}: done, {:?}", a.out);
-    }
-    Ok(())
+    })
 }
 
 /// Rewrites `path` with its rows in the order of `order` (atomic: a temporary file renamed).
@@ -1200,7 +1173,8 @@ mod tests {
         // a static scene run dynamically needs dt and steps (no defaults)
         let e = err("[[scene]]\nname = \"ring\"\ndynamic = true\nn = [20]\n");
         assert!(e.contains("dt must be finite and > 0, got 0"), "{e}");
-        assert_ne!(dynamic_header(), header());
-        assert_eq!(&dynamic_header()[..CASE_COLUMNS.len()], &CASE_COLUMNS[..]);
+        assert_ne!(header_dynamic(), header_static());
+        let case = header::<CaseColumns>();
+        assert_eq!(&header_dynamic()[..case.len()], &case[..]);
     }
 }
