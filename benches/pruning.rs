@@ -7,7 +7,7 @@
 //!   `ε_qp + h̄` on every edge (`ε_qp = ε(1 + 10⁻⁶) + 10⁻¹¹`, `h̄` the median contact edge length),
 //!   pairs with both ends fixed skipped;
 //! - `broad_phase/min_distance`: the exact admissibility check of every iterate,
-//!   `min_distance_near(mesh, x0, 2ε, true)`;
+//!   `contact::min_distance(mesh, x0, 2ε, true)`;
 //! - `broad_phase/structure`: the uniform grid (`grid`, [`AabbGrid`]) against the bounding volume
 //!   hierarchy (`bvh`, [`Bvh`]) on the query pattern of the first bench: the contact edge boxes
 //!   inflated by the same radius, the structure built over them, then one query per contact
@@ -29,10 +29,10 @@
 
 use std::time::Duration;
 
-use contactlab::contact::broad_phase::{min_distance_near, point_edge_near, Aabb, AabbGrid};
+use contactlab::contact::broad_phase::{point_edge_near, Aabb, AabbGrid};
 use contactlab::contact::bvh::Bvh;
 use contactlab::contact::PointEdgePair;
-use contactlab::contact::{rows_for, ContactPair};
+use contactlab::contact::{min_distance, rows_for, ContactPair};
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::mesh::Mesh;
 use contactlab::scene::Scene;
@@ -142,7 +142,7 @@ fn benches(c: &mut Criterion) {
         let (mesh, x) = (&f.scene.mesh, &f.scene.x0);
         group.throughput(Throughput::Elements(mesh.nv() as u64));
         group.bench_function(BenchmarkId::from_parameter(f.n), |b| {
-            b.iter(|| min_distance_near(mesh, black_box(x), 2.0 * f.scene.eps, true))
+            b.iter(|| min_distance(mesh, black_box(x), 2.0 * f.scene.eps, true))
         });
     }
     group.finish();

@@ -1,9 +1,9 @@
 //! The 3D engine on the 3D scenes (issue 5): every iterate passes the exact ALL-PAIRS 3D
-//! admissibility check (the O(N²) [`min_distance_3d`], not the broad phase the loop uses) and J
+//! admissibility check (the O(N²) [`min_distance_brute_force`], not the broad phase the loop uses) and J
 //! never increases, with lazy rows and with the trust region; the backends' final energies;
 //! and a `contactlab run` directory of a 3D scene.
 
-use contactlab::contact::min_distance_3d;
+use contactlab::contact::{min_distance_brute_force, MinDistance};
 use contactlab::scene::balloons3d::{self, Balloons3dParams};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::sheets::{self, SheetsParams};
@@ -51,14 +51,13 @@ fn checked_run_with(
 ) -> Trace {
     let mesh = &scene.mesh;
     assert_eq!(mesh.dim, 3);
-    let verts = mesh.contact_vertices();
     let pruning = settings.pruning;
     let settings = OuterSettings {
         tol_j: accuracy.tol_j(),
         ..settings
     };
     let mut b = backend_from_name(backend, &accuracy.qp_settings(backend)).unwrap();
-    let (d0, _) = min_distance_3d(&scene.x0, &verts, &mesh.edges, &mesh.faces);
+    let d0 = min_distance_brute_force(mesh, &scene.x0).distance;
     assert!(d0 >= scene.eps, "{}: x0 at {d0} < eps", scene.name);
     let mut j_prev = scene.energy.value(&scene.x0);
     let mut iterates = 0;
@@ -70,7 +69,7 @@ fn checked_run_with(
         b.as_mut(),
         &settings,
         &mut |r, x| {
-            let (d, pair) = min_distance_3d(x, &verts, &mesh.edges, &mesh.faces);
+            let MinDistance { distance: d, pair } = min_distance_brute_force(mesh, x);
             assert!(
                 d >= scene.eps,
                 "{} {backend} {pruning:?}: iterate {} inadmissible: {pair:?} at {d:.6e} < eps {:.6e}",

@@ -3,7 +3,7 @@
 //! direction that stays in T(ψ)), where the lemma is tightest.
 
 use contactlab::contact::point_edge_rows;
-use contactlab::contact::{check_admissible, point_edge_pairs};
+use contactlab::contact::{min_distance_brute_force, point_edge_pairs};
 use contactlab::scene::mesh::{Body, BodyKind, Mesh};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -61,8 +61,8 @@ fn lemma_4_2_boundary_points_of_t_psi_are_admissible() {
     while meshes < 200 {
         let mesh = random_mesh(&mut rng);
         let psi = mesh.x_ref.clone();
-        let (pairs, fixed) = point_edge_pairs(&mesh);
-        if check_admissible(&mesh, &psi, &pairs, &fixed).distance < eps {
+        let (pairs, _) = point_edge_pairs(&mesh);
+        if min_distance_brute_force(&mesh, &psi).distance < eps {
             continue; // ψ must be admissible: draw again
         }
         meshes += 1;
@@ -89,7 +89,7 @@ fn lemma_4_2_boundary_points_of_t_psi_are_admissible() {
                 continue;
             }
             let phi: Vec<f64> = psi.iter().zip(&d).map(|(p, q)| p + tmax * q).collect();
-            let md = check_admissible(&mesh, &phi, &pairs, &fixed);
+            let md = min_distance_brute_force(&mesh, &phi);
             assert!(
                 md.distance >= eps * (1.0 - 1e-9),
                 "Lemma 4.2 violated: {} at {:.3e} < eps",
@@ -103,7 +103,7 @@ fn lemma_4_2_boundary_points_of_t_psi_are_admissible() {
                 .zip(&d)
                 .map(|(p, q)| p + 3.0 * tmax * q)
                 .collect();
-            if check_admissible(&mesh, &beyond, &pairs, &fixed).distance < eps {
+            if min_distance_brute_force(&mesh, &beyond).distance < eps {
                 outside_inadmissible += 1;
             }
         }

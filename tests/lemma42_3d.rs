@@ -1,8 +1,9 @@
 //! Lemma 4.2 in 3D: every φ in T(ψ) built from the rows of eq. (6) is admissible (exact check
-//! over all disjoint vertex–triangle and edge–edge pairs, and no edge through a triangle); and
-//! Remark 4.3: with vertex–triangle rows alone, two edges pass through each other.
+//! over all disjoint point–triangle and edge–edge pairs, and no edge through a triangle); and
+//! Remark 4.3: with point–triangle rows alone, two edges pass through each other.
 
-use contactlab::contact::{all_rows_3d, min_distance_3d, Closest3, Row3};
+use contactlab::contact::{all_rows_3d, min_distance_brute_force, ClosestPair, Row3};
+use contactlab::scene::mesh::Mesh;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -18,6 +19,35 @@ fn two_sheets() -> (Vec<usize>, Vec<[usize; 2]>, Vec<[usize; 3]>) {
         }
     }
     ((0..8).collect(), edges, tris)
+}
+
+/// A 3D mesh of these contact edges and triangles at `x` (no contact filter).
+fn mesh(x: &[f64], edges: &[[usize; 2]], tris: &[[usize; 3]]) -> Mesh {
+    Mesh {
+        dim: 3,
+        x_ref: x.to_vec(),
+        fixed: vec![false; x.len() / 3],
+        edges: edges.to_vec(),
+        edge_body: vec![0; edges.len()],
+        triangles: tris.to_vec(),
+        faces: tris.to_vec(),
+        face_body: vec![0; tris.len()],
+        ..Default::default()
+    }
+}
+
+/// The exact check over all pairs (O(N²), [`min_distance_brute_force`]) of the elements at `x`;
+/// `verts` are the vertices of the elements.
+fn min_distance_3d(
+    x: &[f64],
+    verts: &[usize],
+    edges: &[[usize; 2]],
+    tris: &[[usize; 3]],
+) -> (f64, ClosestPair) {
+    let m = mesh(x, edges, tris);
+    assert_eq!(m.contact_vertices(), verts);
+    let md = min_distance_brute_force(&m, x);
+    (md.distance, md.pair)
 }
 
 /// Largest t in [0, 1] with every row ≥ ε at ψ + t d (rows are affine in t).
@@ -69,7 +99,7 @@ fn lemma42_3d_every_point_of_t_psi_is_admissible() {
                 "trial {trials}: φ in T(ψ) at distance {dist:e} < ε = {eps:e} ({pair:?})"
             );
         }
-        // the same step with the vertex–triangle rows only
+        // the same step with the point–triangle rows only
         let vt = all_rows_3d(&psi, &verts, &edges, &tris, false).unwrap();
         let t_vt = t_max(&vt, &psi, &d, eps);
         let phi: Vec<f64> = psi.iter().zip(&d).map(|(p, q)| p + t_vt * q).collect();
@@ -79,7 +109,7 @@ fn lemma42_3d_every_point_of_t_psi_is_admissible() {
     }
     eprintln!(
         "lemma42_3d: {trials} trials, {clipped} steps limited by the rows, \
-         {vt_only_violations} inadmissible steps with vertex–triangle rows only"
+         {vt_only_violations} inadmissible steps with point–triangle rows only"
     );
     // the test is not vacuous: the rows cut most steps short
     assert!(
@@ -89,7 +119,7 @@ fn lemma42_3d_every_point_of_t_psi_is_admissible() {
     // and the edge–edge rows are needed: without them some steps leave A_{h,ε}
     assert!(
         vt_only_violations > 0,
-        "vertex–triangle rows alone never failed in 400 trials"
+        "point–triangle rows alone never failed in 400 trials"
     );
 }
 
@@ -120,16 +150,16 @@ fn remark43_edges_pass_through_without_edge_edge_rows() {
     let (d1, pair) = min_distance_3d(&phi, &verts, &edges, &tris);
     assert_eq!(d1, 0.0);
     assert!(
-        matches!(pair, Closest3::EdgeThroughTriangle { .. }),
+        matches!(pair, ClosestPair::EdgeThroughFace { .. }),
         "{pair:?}"
     );
-    // every vertex–triangle row still holds at φ: those rows alone allow the step
+    // every point–triangle row still holds at φ: those rows alone allow the step
     let vt = all_rows_3d(&psi, &verts, &edges, &tris, false).unwrap();
     assert!(!vt.is_empty());
     for r in &vt {
         assert!(
             r.value(&phi) >= eps,
-            "a vertex–triangle row is violated: {r:?}"
+            "a point–triangle row is violated: {r:?}"
         );
     }
     // the edge–edge rows forbid it
@@ -150,7 +180,7 @@ fn remark43_edges_pass_through_without_edge_edge_rows() {
 fn broad_phase_3d_matches_all_pairs() {
     use contactlab::contact::distance::{edge_edge_distance, point_triangle_distance};
     use contactlab::contact::p3;
-    use contactlab::contact::{min_distance_3d_bvh, near_pairs_3d};
+    use contactlab::contact::{min_distance, near_pairs_3d};
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     for trial in 0..40 {
         let nt = 30;
@@ -174,7 +204,7 @@ fn broad_phase_3d_matches_all_pairs() {
         }
         let verts: Vec<usize> = (0..3 * nt).collect();
         let r = 0.25;
-        let near = near_pairs_3d(&x, &verts, &edges, &tris, r);
+        let near = near_pairs_3d(&x, &verts, &edges, &tris, r, None);
         let mut vt = Vec::new();
         for (ti, t) in tris.iter().enumerate() {
             for &v in &verts {
@@ -207,14 +237,15 @@ fn broad_phase_3d_matches_all_pairs() {
                 }
             }
         }
-        assert_eq!(near.vertex_triangle, vt, "trial {trial}");
+        assert_eq!(near.point_triangle, vt, "trial {trial}");
         assert_eq!(near.edge_edge, ee, "trial {trial}");
         assert!(
             !vt.is_empty() && !ee.is_empty(),
             "trial {trial}: nothing near, test vacuous"
         );
         let brute = min_distance_3d(&x, &verts, &edges, &tris);
-        let fast = min_distance_3d_bvh(&x, &verts, &edges, &tris, 0.01);
+        let fast = min_distance(&mesh(&x, &edges, &tris), &x, 0.01, false);
+        let fast = (fast.distance, fast.pair);
         assert_eq!(brute.0, fast.0, "trial {trial}: {brute:?} vs {fast:?}");
     }
 }

@@ -3,7 +3,7 @@
 //! final energy, every pruned iterate passes the exact ALL-PAIRS admissibility check (the O(N²)
 //! reference, not the broad phase), and results do not depend on the number of threads.
 
-use contactlab::contact::{check_admissible, point_edge_pairs};
+use contactlab::contact::min_distance_brute_force;
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::solve::outer::{run, OuterSettings, Pruning, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings};
@@ -37,7 +37,6 @@ fn trace_tol(
         ..Default::default()
     };
     let (mut energies, mut iterates) = (Vec::new(), Vec::new());
-    let (movable, fixed) = point_edge_pairs(&scene.mesh);
     let res = run(
         &scene.mesh,
         &scene.energy,
@@ -47,7 +46,7 @@ fn trace_tol(
         &settings,
         &mut |r, x| {
             // The reference check over every disjoint pair, independent of the broad phase.
-            let md = check_admissible(&scene.mesh, x, &movable, &fixed);
+            let md = min_distance_brute_force(&scene.mesh, x);
             assert!(
                 md.distance >= scene.eps,
                 "{pruning:?}: iterate {} inadmissible: {} at {:.3e} < eps {:.3e}",

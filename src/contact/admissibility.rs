@@ -1,14 +1,30 @@
-//! The exact admissibility check: the minimum distance over every pair of disjoint contact
-//! elements (2D: vertex–edge and edge crossings; 3D: vertex–triangle, edge–edge and an edge
-//! through a triangle), and the closest pair that attains it. Every iterate of a run is checked
-//! here against ε (with the round-off allowance of the outer loop); the broad-phase forms of
-//! the same check live in [`super::broad_phase`] and are tested equal to these O(N²) forms.
+//! The exact admissibility check: is φ in A_{h,ε}, i.e. is every pair of disjoint contact
+//! elements at distance ≥ ε? It returns the minimum distance over those pairs and the closest
+//! pair that attains it:
+//!
+//! | dim | pairs (disjoint) | distance |
+//! |---|---|---|
+//! | 2 | `point_edge` (x ∉ a) | `dist(φ(x), φ(a))` |
+//! | 2 | `edge_edge` (a ∩ b = ∅) | 0 when they cross (otherwise a `point_edge` pair is closer) |
+//! | 3 | `point_triangle` (x ∉ T) | `dist(φ(x), φ(T))` |
+//! | 3 | `edge_edge` (a ∩ b = ∅) | `dist(φ(a), φ(b))` |
+//! | 3 | edge a through face T (a ∩ T = ∅) | 0 ([`segment_meets_triangle`]) |
+//!
+//! Pairs the contact filter of the mesh ([`Mesh::filter`]) excludes are not checked.
+//!
+//! Lemma 4.2 (and its 3D form with the rows of eq. 6, Remark 4.3) makes every φ of T(ψ)
+//! admissible; the check makes sure of it on every iterate anyway, in floating point, with the
+//! round-off allowance of the outer loop. One entry point, [`min_distance`], does it for every
+//! iterate of a run (its `skip_fixed = false` form checks the pairs whose vertices are all
+//! fixed, once at the start); it runs through the broad phase ([`super::broad_phase`]). The
+//! O(N²) form [`min_distance_brute_force`] is the reference the tests hold it to.
 
+use super::broad_phase;
 use super::distance::{
     edge_edge_distance, edge_edge_distance_2d, point_edge_distance, point_triangle_distance,
 };
 use super::p3;
-use super::point_edge::PointEdgePair;
+use super::point_edge::{point_edge_pairs, PointEdgePair};
 use crate::scene::mesh::{ContactFilter, Mesh};
 use nalgebra::Vector3;
 
@@ -34,8 +50,10 @@ pub enum ClosestPair {
         /// Second edge.
         b: usize,
     },
-    /// 3D: vertex `x` and contact face `t` (vertices `face`).
-    VertexTriangle {
+    /// 3D: vertex `x` and contact face `t` (vertices `face`). Tagged `vertex_triangle` in
+    /// summary.json, as before the pair kinds were renamed.
+    #[serde(rename = "vertex_triangle")]
+    PointTriangle {
         /// Vertex.
         x: usize,
         /// Face index.
@@ -72,7 +90,7 @@ impl std::fmt::Display for ClosestPair {
                 write!(f, "vertex {x} and edge {a} = [{a0}, {a1}]")
             }
             ClosestPair::EdgeEdge { a, b } => write!(f, "edges {a} and {b} (they cross)"),
-            ClosestPair::VertexTriangle { x, t, face } => {
+            ClosestPair::PointTriangle { x, t, face } => {
                 write!(f, "vertex {x} and face {t} = {face:?}")
             }
             ClosestPair::Segments { a, b, ea, eb } => {
@@ -98,12 +116,74 @@ pub struct MinDistance {
     pub pair: ClosestPair,
 }
 
-/// Exact minimum distance of `x` over the disjoint pairs of contact elements: every
+/// The exact admissibility check of `x`, through the broad phase: the minimum distance over
+/// every pair of disjoint contact elements the contact filter allows (module documentation),
+/// and the closest pair. 2D: [`broad_phase::min_distance_2d`]; with `skip_fixed`, the pairs
+/// whose vertices are all fixed (constant: checked once, at the start, with `skip_fixed =
+/// false`) are left out. 3D: [`broad_phase::min_distance_3d`] over every pair (`skip_fixed`
+/// is ignored: the constant pairs are checked every time). `r0 > 0` is the initial search
+/// radius; the result does not depend on it. Equal to [`min_distance_brute_force`] (tested;
+/// where several pairs attain the minimum, the two may name different ones).
+pub fn min_distance(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDistance {
+    if mesh.dim == 2 {
+        return broad_phase::min_distance_2d(mesh, x, r0, skip_fixed);
+    }
+    let (distance, c) = broad_phase::min_distance_3d(mesh, x, r0);
+    MinDistance {
+        distance,
+        pair: closest_pair(mesh, c),
+    }
+}
+
+/// The [`ClosestPair`] (element indices and vertices) of a 3D [`Closest3`].
+fn closest_pair(mesh: &Mesh, c: Closest3) -> ClosestPair {
+    match c {
+        Closest3::PointTriangle { x, t } => ClosestPair::PointTriangle {
+            x,
+            t,
+            face: mesh.faces[t],
+        },
+        Closest3::EdgeEdge { a, b } => ClosestPair::Segments {
+            a,
+            b,
+            ea: mesh.edges[a],
+            eb: mesh.edges[b],
+        },
+        Closest3::EdgeThroughTriangle { a, t } => ClosestPair::EdgeThroughFace { a, t },
+        Closest3::None => ClosestPair::None,
+    }
+}
+
+/// The same check as [`min_distance`] over every pair, by direct enumeration, O(N²): the
+/// reference of the tests. 2D: every `point_edge` pair of [`point_edge_pairs`] (those with a
+/// free vertex first, then the all-fixed ones; the first wins a tie) and every pair of disjoint
+/// edges for crossings; 3D: every `point_triangle`, edge-through-face and `edge_edge` pair.
+pub fn min_distance_brute_force(mesh: &Mesh, x: &[f64]) -> MinDistance {
+    if mesh.dim == 2 {
+        let (movable, fixed) = point_edge_pairs(mesh);
+        let a = min_distance_of_pairs(mesh, x, &movable);
+        let b = min_distance_of_pairs(mesh, x, &fixed);
+        return if b.distance < a.distance { b } else { a };
+    }
+    let (distance, c) = min_distance_3d_brute_force(
+        x,
+        &mesh.contact_vertices(),
+        &mesh.edges,
+        &mesh.faces,
+        mesh.filter(),
+    );
+    MinDistance {
+        distance,
+        pair: closest_pair(mesh, c),
+    }
+}
+
+/// [`min_distance_brute_force`] in 2D over the given `point_edge` pairs: every
 /// `point_edge` pair (x ∉ a) in `pairs`, and every pair of disjoint contact edges (crossing
 /// edges have distance 0 although their endpoints may be far apart). In 2D this is the distance
 /// of every pair of disjoint vertices/edges except the two ends of one edge, which eq. (4) does
 /// not constrain either.
-pub fn min_distance_of_pairs(mesh: &Mesh, x: &[f64], pairs: &[PointEdgePair]) -> MinDistance {
+fn min_distance_of_pairs(mesh: &Mesh, x: &[f64], pairs: &[PointEdgePair]) -> MinDistance {
     let mut best = MinDistance {
         distance: f64::INFINITY,
         pair: ClosestPair::None,
@@ -151,31 +231,10 @@ pub fn min_distance_of_pairs(mesh: &Mesh, x: &[f64], pairs: &[PointEdgePair]) ->
     best
 }
 
-/// Exact admissibility check of `x` over all disjoint pairs (movable and fixed).
-pub fn check_admissible(
-    mesh: &Mesh,
-    x: &[f64],
-    movable: &[PointEdgePair],
-    fixed: &[PointEdgePair],
-) -> MinDistance {
-    let a = min_distance_of_pairs(mesh, x, movable);
-    let b = min_distance_of_pairs(mesh, x, fixed);
-    if b.distance < a.distance {
-        b
-    } else {
-        a
-    }
-}
-
-/// The once-only check of the all-fixed pairs.
-pub fn fixed_pairs_admissible(mesh: &Mesh, x: &[f64], fixed: &[PointEdgePair]) -> MinDistance {
-    min_distance_of_pairs(mesh, x, fixed)
-}
-
 /// Whether the segment `[a0, a1]` meets the triangle `(t0, t1, t2)` (closed sets), by exact
 /// orientation signs of the floating-point inputs (the determinants are computed in f64, so
 /// "exact" means: up to their rounding). Coplanar segments are reported as not meeting; their
-/// contact shows as a zero vertex–triangle or edge–edge distance instead.
+/// contact shows as a zero point–triangle or edge–edge distance instead.
 pub fn segment_meets_triangle(
     a0: &Vector3<f64>,
     a1: &Vector3<f64>,
@@ -193,7 +252,7 @@ pub fn segment_meets_triangle(
     }
     // Coplanar up to rounding: an orientation of two points within rounding of the plane is
     // noise, and its sign says nothing. A segment lying in the plane meets the triangle only
-    // through an edge or an endpoint, which the vertex–triangle and edge–edge distances
+    // through an edge or an endpoint, which the point–triangle and edge–edge distances
     // already report, so it does not count as passing through.
     let n = (t1 - t0).cross(&(t2 - t0)).norm();
     let scale = [t1 - t0, t2 - t0, a0 - t0, a1 - t0]
@@ -211,11 +270,16 @@ pub fn segment_meets_triangle(
     (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0)
 }
 
-/// The closest pair of disjoint elements found by [`min_distance_3d`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The closest pair of disjoint elements of a 3D mesh, by element index: what
+/// [`broad_phase::min_distance_3d`] finds.
+///
+/// `Debug` is written out: its text reaches the built-in 3D scenes' error messages
+/// (`InadmissibleStart`), which keep the variant names they had before the renaming
+/// (`VertexTriangle`).
+#[derive(Clone, Copy, PartialEq)]
 pub enum Closest3 {
     /// Vertex `x` and triangle `t` (index).
-    VertexTriangle {
+    PointTriangle {
         /// Vertex.
         x: usize,
         /// Triangle index.
@@ -239,22 +303,33 @@ pub enum Closest3 {
     None,
 }
 
-/// The exact minimum distance over all disjoint element pairs of a 3D mesh (all pairs, O(N²):
-/// the reference the pruned check of the 2D engine is tested against): vertex–triangle pairs
-/// (`vertices` × `triangles`, x ∉ T), edge–edge pairs (a ∩ b = ∅), and 0 when an edge passes
-/// through a triangle it does not touch.
-pub fn min_distance_3d(
-    x: &[f64],
-    vertices: &[usize],
-    edges: &[[usize; 2]],
-    triangles: &[[usize; 3]],
-) -> (f64, Closest3) {
-    min_distance_3d_filtered(x, vertices, edges, triangles, None)
+impl std::fmt::Debug for Closest3 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Closest3::PointTriangle { x, t } => f
+                .debug_struct("VertexTriangle")
+                .field("x", &x)
+                .field("t", &t)
+                .finish(),
+            Closest3::EdgeEdge { a, b } => f
+                .debug_struct("EdgeEdge")
+                .field("a", &a)
+                .field("b", &b)
+                .finish(),
+            Closest3::EdgeThroughTriangle { a, t } => f
+                .debug_struct("EdgeThroughTriangle")
+                .field("a", &a)
+                .field("t", &t)
+                .finish(),
+            Closest3::None => write!(f, "None"),
+        }
+    }
 }
 
-/// [`min_distance_3d`] over the pairs a contact filter allows (`None`: all pairs; `edges` and
-/// `triangles` must then be the mesh's contact edges and faces the filter was built for).
-pub fn min_distance_3d_filtered(
+/// [`min_distance_brute_force`] in 3D over `vertices` × `triangles` (x ∉ T), the pairs of
+/// disjoint `edges` and the edges through triangles they do not touch, skipping the pairs
+/// `filter` excludes (`edges` and `triangles` are then the mesh's contact edges and faces).
+fn min_distance_3d_brute_force(
     x: &[f64],
     vertices: &[usize],
     edges: &[[usize; 2]],
@@ -265,12 +340,12 @@ pub fn min_distance_3d_filtered(
     for (ti, t) in triangles.iter().enumerate() {
         let (t0, t1, t2) = (p3(x, t[0]), p3(x, t[1]), p3(x, t[2]));
         for &v in vertices {
-            if t.contains(&v) || filter.is_some_and(|f| !f.vertex_face(v, ti)) {
+            if t.contains(&v) || filter.is_some_and(|f| !f.point_triangle(v, ti)) {
                 continue;
             }
             let d = point_triangle_distance(&p3(x, v), &t0, &t1, &t2).distance;
             if d < best.0 {
-                best = (d, Closest3::VertexTriangle { x: v, t: ti });
+                best = (d, Closest3::PointTriangle { x: v, t: ti });
             }
         }
         for (ai, e) in edges.iter().enumerate() {
@@ -299,14 +374,14 @@ pub fn min_distance_3d_filtered(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{edge_edge_rows, vertex_triangle_rows};
+    use super::super::{edge_edge_rows, point_triangle_rows};
     use super::*;
 
     #[test]
     fn rows3d_values_at_psi_are_at_least_the_distance() {
         // x above the triangle's interior: the three rows equal the distance at ψ
         let psi = [0.2, 0.2, 0.5, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        let (rows, d) = vertex_triangle_rows(&psi, 0, [1, 2, 3]).unwrap();
+        let (rows, d) = point_triangle_rows(&psi, 0, [1, 2, 3]).unwrap();
         assert!((d - 0.5).abs() < 1e-15);
         for r in rows {
             assert!((r.value(&psi) - 0.5).abs() < 1e-15, "{}", r.value(&psi));
@@ -318,8 +393,28 @@ mod tests {
         for r in rows {
             assert!(r.value(&psi) >= 1.0 - 1e-15);
         }
-        assert!(vertex_triangle_rows(&psi, 0, [0, 2, 3]).is_none());
+        assert!(point_triangle_rows(&psi, 0, [0, 2, 3]).is_none());
         assert!(edge_edge_rows(&psi, [0, 1], [1, 3]).is_none());
+    }
+
+    #[test]
+    fn point_triangle_keeps_its_output_text() {
+        // summary.json, contacts.csv and the scenes' error messages predate the renaming
+        let c = ClosestPair::PointTriangle {
+            x: 1,
+            t: 2,
+            face: [3, 4, 5],
+        };
+        let j = serde_json::to_value(c).unwrap();
+        assert_eq!(j["kind"], "vertex_triangle");
+        assert_eq!(c.to_string(), "vertex 1 and face 2 = [3, 4, 5]");
+        let c3 = Closest3::PointTriangle { x: 1, t: 2 };
+        assert_eq!(format!("{c3:?}"), "VertexTriangle { x: 1, t: 2 }");
+        let c3 = Closest3::EdgeThroughTriangle { a: 1, t: 2 };
+        assert_eq!(format!("{c3:?}"), "EdgeThroughTriangle { a: 1, t: 2 }");
+        assert_eq!(format!("{:?}", Closest3::None), "None");
+        let p = crate::contact::ContactPair::PointTriangle { x: 1, t: 2 };
+        assert_eq!(p.kind(), "vertex_triangle");
     }
 
     #[test]

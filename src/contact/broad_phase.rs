@@ -1,33 +1,43 @@
-//! Broad phase: in 2D it finds the `point_edge` pairs and the edge crossings through an index
-//! over the axis-aligned boxes of the contact edges. Two structures with one contract (register
-//! boxes by index; a query returns the overlapping items sorted, without repetition) exist in any
-//! dimension: a uniform grid built by sorting cell keys ([`AabbGrid`]) and a bounding volume
-//! hierarchy ([`crate::contact::bvh::Bvh`]). The pair search uses the BVH ([`edge_index`]): on the
-//! balloons scene the bench `broad_phase/structure` (build plus one query per vertex) measured
-//! them equal at 10³ and 10⁴ elements per membrane and the BVH 1.4× faster at 10⁵ (README,
-//! "Broad phase"). The grid stays for comparison and for scenes where it may win.
+//! Broad phase: the pairs of contact elements closer than a radius, in either dimension,
+//! through an index over axis-aligned boxes; the narrow phase (the kernels of
+//! [`super::distance`], exact) then sees every such pair. It serves the pair search of the rows
+//! of T(ψ) (eq. 4 in 2D, eq. 6 in 3D) and the exact admissibility check of every iterate
+//! ([`super::admissibility::min_distance`], implemented here by [`min_distance_2d`] and
+//! [`min_distance_3d`]).
 //!
-//! Every contact edge `a` is registered with its axis-aligned bounding box inflated by a
+//! | dim | search | pairs |
+//! |---|---|---|
+//! | 2 | [`point_edge_near`] | `point_edge` within `r_x + r_a` (per-vertex and per-edge radii) |
+//! | 2 | [`first_crossing`] (in [`super::edge_edge`]) | crossing `edge_edge` pairs |
+//! | 3 | [`near_pairs_3d`] | `point_triangle` and `edge_edge` within `r` |
+//! | 3 | [`min_distance_3d`] | also an edge through a face |
+//!
+//! Two structures with one contract (register boxes by index; a query returns the overlapping
+//! items sorted, without repetition) exist in any dimension: a uniform grid built by sorting
+//! cell keys ([`AabbGrid`]) and a bounding volume hierarchy ([`crate::contact::bvh::Bvh`]). The
+//! pair searches use the BVH ([`edge_index`]): on the balloons scene the bench
+//! `broad_phase/structure` of `benches/pruning.rs` (build plus one query per vertex) measured
+//! them equal at 10³ and 10⁴ elements per membrane and the BVH 1.4× faster at 10⁵. The grid
+//! stays for comparison and for scenes where it may win.
+//!
+//! In 2D every contact edge `a` is registered with its axis-aligned bounding box inflated by a
 //! per-edge radius `r_a`; a vertex `x` with radius `r_x` queries the box
 //! `[ψ(x) − r_x, ψ(x) + r_x]`. Two boxes that do not overlap cannot hold a pair with
 //! `dist(ψ(x), ψ(a)) ≤ r_x + r_a` (the Euclidean distance bounds the L∞ distance), so the narrow
-//! phase ([`point_edge_distance`], exact) sees every such pair.
+//! phase ([`point_edge_distance`]) sees every such pair. In 3D the triangles and the edges are
+//! registered with their boxes, and a vertex or an edge queries its box inflated by `r`.
 //!
 //! The grid is a sorted vector of `(cell key, item)` entries (no hash map): building it is a
 //! parallel sort, a lookup a binary search per run of cells. The cell size defaults to the mean
 //! largest side of the registered boxes, so a box spans O(1) cells and a cell holds O(1) boxes
-//! on the quasi-uniform meshes of the scenes. With either structure the output order (vertex,
-//! then edge index) does not depend on the number of rayon threads.
-//!
-//! The same names run through the layers: `point_edge` pairs here, in [`crate::contact`], in the
-//! rows of T(ψ) ([`crate::contact`]) and in the diagnostics.
+//! on the quasi-uniform meshes of the scenes. The output is sorted (vertex, then element
+//! index), so it does not depend on the number of rayon threads.
 
 use super::admissibility::{segment_meets_triangle, Closest3};
+pub use super::edge_edge::first_crossing;
 use super::p3;
 use crate::contact::bvh::Bvh;
-use crate::contact::distance::{
-    edge_edge_distance, edge_edge_distance_2d, point_edge_distance, point_triangle_distance,
-};
+use crate::contact::distance::{edge_edge_distance, point_edge_distance, point_triangle_distance};
 use crate::contact::{ClosestPair, MinDistance, PointEdgePair};
 use crate::scene::mesh::{ContactFilter, Mesh};
 use rayon::prelude::*;
@@ -41,8 +51,7 @@ pub struct NearPair {
     pub distance: f64,
 }
 
-/// A uniform grid over axis-aligned boxes in `D` dimensions (2 here; 3D primitives —
-/// triangles, edges in space — register their boxes the same way). Items are registered by
+/// A uniform grid over axis-aligned boxes in `D` dimensions. Items are registered by
 /// index; a query returns the items of every cell the query box overlaps, sorted, without
 /// repetition. A box that would span more than [`MAX_CELLS_PER_BOX`] cells (one vertex moving
 /// far in a lazy check) goes to a short list returned by every query instead, so one outlier
@@ -62,7 +71,8 @@ pub const MAX_CELLS_PER_BOX: u64 = 4096;
 /// An axis-aligned box `(lo, hi)`.
 pub type Aabb<const D: usize> = ([f64; D], [f64; D]);
 
-fn edge_box(x: &[f64], e: [usize; 2], r: f64) -> Aabb<2> {
+/// The box of the 2D edge `e` at `x`, inflated by `r`.
+pub(crate) fn edge_box(x: &[f64], e: [usize; 2], r: f64) -> Aabb<2> {
     let (a, b) = (Mesh::p2(x, e[0]), Mesh::p2(x, e[1]));
     (
         [a.x.min(b.x) - r, a.y.min(b.y) - r],
@@ -214,8 +224,8 @@ impl<const D: usize> AabbGrid<D> {
 }
 
 /// The index of the contact edges of `mesh` at `x`, edge `a` inflated by `r_edge[a]`: a
-/// [`Bvh`], chosen over [`AabbGrid`] by the `broad_phase/structure` bench (README, "Broad
-/// phase").
+/// [`Bvh`], chosen over [`AabbGrid`] by the `broad_phase/structure` bench (module
+/// documentation).
 pub fn edge_index(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> Bvh<2> {
     let boxes: Vec<Aabb<2>> = mesh
         .edges
@@ -229,7 +239,7 @@ pub fn edge_index(mesh: &Mesh, x: &[f64], r_edge: &[f64]) -> Bvh<2> {
 /// Every `point_edge` pair `(x, a)`, `x ∉ a`, of contact vertex `x` and contact edge `a` with
 /// `dist(x(x), x(a)) ≤ r_vertex[x] + r_edge[a]`, with its exact distance, sorted by vertex then
 /// edge. `r_vertex` may be empty (all zero). With `skip_fixed`, pairs whose three vertices are
-/// fixed are left out (their rows are constant: SPEC §2).
+/// fixed are left out (their rows are constant: checked once, at the start).
 pub fn point_edge_near(
     mesh: &Mesh,
     x: &[f64],
@@ -273,7 +283,7 @@ pub fn point_edge_near_in(
                 if skip_fixed && mesh.fixed[v] && mesh.fixed[e[0]] && mesh.fixed[e[1]] {
                     continue;
                 }
-                if filter.is_some_and(|f| !f.vertex_edge(v, a)) {
+                if filter.is_some_and(|f| !f.point_edge(v, a)) {
                     continue;
                 }
                 let d = point_edge_distance(&p, &Mesh::p2(x, e[0]), &Mesh::p2(x, e[1])).distance;
@@ -290,58 +300,12 @@ pub fn point_edge_near_in(
     per_vertex.into_iter().flatten().collect()
 }
 
-/// The first pair (smallest `(a, b)`, `a < b`) of disjoint contact edges that intersect at `x`
-/// (distance 0), if any. Only a crossing can make two disjoint edges closer than their
-/// `point_edge` pairs, so this completes the exact admissibility check.
-///
-/// With `skip_fixed`, pairs of edges whose four vertices are fixed are not tested.
-pub fn first_crossing(mesh: &Mesh, x: &[f64], skip_fixed: bool) -> Option<(usize, usize)> {
-    let index = edge_index(mesh, x, &vec![0.0; mesh.edges.len()]);
-    let filter = mesh.filter();
-    (0..mesh.edges.len())
-        .into_par_iter()
-        .map_init(Vec::new, |buf: &mut Vec<u32>, a| {
-            let ea = mesh.edges[a];
-            let (lo, hi) = edge_box(x, ea, 0.0);
-            buf.clear();
-            index.query(&lo, &hi, buf);
-            for &b in buf.iter() {
-                let b = b as usize;
-                if b <= a {
-                    continue;
-                }
-                let eb = mesh.edges[b];
-                if ea[0] == eb[0] || ea[0] == eb[1] || ea[1] == eb[0] || ea[1] == eb[1] {
-                    continue;
-                }
-                if skip_fixed && [ea[0], ea[1], eb[0], eb[1]].iter().all(|&v| mesh.fixed[v]) {
-                    continue;
-                }
-                if filter.is_some_and(|f| !f.edge_edge(a, b)) {
-                    continue;
-                }
-                let d = edge_edge_distance_2d(
-                    &Mesh::p2(x, ea[0]),
-                    &Mesh::p2(x, ea[1]),
-                    &Mesh::p2(x, eb[0]),
-                    &Mesh::p2(x, eb[1]),
-                );
-                if d == 0.0 {
-                    return Some((a, b));
-                }
-            }
-            None
-        })
-        .flatten()
-        .min()
-}
-
-/// Exact minimum distance over the disjoint pairs of contact elements at `x`, through the broad
-/// phase: the `point_edge` pairs within a radius `r` (starting at `r0`, multiplied by 4 until
-/// some pair is found, so the minimum found is the global one) and the crossing test. With
+/// The exact check of [`crate::contact::admissibility::min_distance`] in 2D: the crossing test
+/// ([`first_crossing`]), then the `point_edge` pairs within a radius `r` (starting at `r0`,
+/// multiplied by 4 until some pair is found, so the minimum found is the global one). With
 /// `skip_fixed`, pairs whose vertices are all fixed are not checked (they were checked once at
-/// the start). The same value as [`crate::contact::check_admissible`] over the same pairs.
-pub fn min_distance_near(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDistance {
+/// the start).
+pub fn min_distance_2d(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDistance {
     let mut best = MinDistance {
         distance: f64::INFINITY,
         pair: ClosestPair::None,
@@ -385,10 +349,155 @@ pub fn min_distance_near(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> M
     }
 }
 
+/// Disjoint element pairs closer than a radius, found through the BVH of
+/// [`crate::contact::bvh::Bvh`]: the 3D broad phase. Sorted, so the result does not depend on the
+/// thread count.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NearPairs3 {
+    /// `(vertex, triangle index, distance)`, sorted by vertex then triangle.
+    pub point_triangle: Vec<(usize, usize, f64)>,
+    /// `(edge a, edge b, distance)` with `a < b`, sorted.
+    pub edge_edge: Vec<(usize, usize, f64)>,
+}
+
+/// The box of the vertices `vs` at `x`, inflated by `r`.
+fn bbox(x: &[f64], vs: &[usize], r: f64) -> Aabb<3> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &v in vs {
+        for c in 0..3 {
+            lo[c] = lo[c].min(x[3 * v + c] - r);
+            hi[c] = hi[c].max(x[3 * v + c] + r);
+        }
+    }
+    (lo, hi)
+}
+
+/// Every disjoint `point_triangle` pair (`vertices` × `triangles`, x ∉ T) and `edge_edge` pair
+/// (a ∩ b = ∅) at distance `< r` that `filter` allows (`None`: all pairs; an excluded pair is
+/// dropped before its distance is computed), through a BVH over the triangles' and the edges'
+/// boxes.
+pub fn near_pairs_3d(
+    x: &[f64],
+    vertices: &[usize],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    r: f64,
+    filter: Option<&ContactFilter>,
+) -> NearPairs3 {
+    let mut out = NearPairs3::default();
+    let mut hits = Vec::new();
+    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
+    let tb = Bvh::<3>::build(&tbox);
+    for &v in vertices {
+        let (lo, hi) = bbox(x, &[v], r);
+        hits.clear();
+        tb.query(&lo, &hi, &mut hits);
+        for &ti in &hits {
+            let t = triangles[ti as usize];
+            if t.contains(&v) || filter.is_some_and(|f| !f.point_triangle(v, ti as usize)) {
+                continue;
+            }
+            let d = point_triangle_distance(&p3(x, v), &p3(x, t[0]), &p3(x, t[1]), &p3(x, t[2]))
+                .distance;
+            if d < r {
+                out.point_triangle.push((v, ti as usize, d));
+            }
+        }
+    }
+    let ebox: Vec<_> = edges.iter().map(|e| bbox(x, e, 0.0)).collect();
+    let eb = Bvh::<3>::build(&ebox);
+    for (ai, a) in edges.iter().enumerate() {
+        let (lo, hi) = bbox(x, a, r);
+        hits.clear();
+        eb.query(&lo, &hi, &mut hits);
+        for &bi in &hits {
+            let bi = bi as usize;
+            let b = edges[bi];
+            if bi <= ai
+                || a.iter().any(|v| b.contains(v))
+                || filter.is_some_and(|f| !f.edge_edge(ai, bi))
+            {
+                continue;
+            }
+            let d =
+                edge_edge_distance(&p3(x, a[0]), &p3(x, a[1]), &p3(x, b[0]), &p3(x, b[1])).distance;
+            if d < r {
+                out.edge_edge.push((ai, bi, d));
+            }
+        }
+    }
+    out.point_triangle.sort_by_key(|p| (p.0, p.1));
+    out.edge_edge.sort_by_key(|p| (p.0, p.1));
+    out
+}
+
+/// The exact check of [`crate::contact::admissibility::min_distance`] in 3D, over the pairs of
+/// contact elements the mesh's contact filter allows: an edge through a triangle among
+/// overlapping boxes (distance 0), then the near pairs ([`near_pairs_3d`]) within a radius that
+/// starts at `r0` (> 0) and grows ×4 until a pair is found. Returns the closest pair by index.
+pub fn min_distance_3d(mesh: &Mesh, x: &[f64], r0: f64) -> (f64, Closest3) {
+    let (vertices, edges, triangles) = (&mesh.contact_vertices(), &mesh.edges, &mesh.faces);
+    let filter = mesh.filter();
+    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
+    let tb = Bvh::<3>::build(&tbox);
+    let mut hits = Vec::new();
+    for (ai, e) in edges.iter().enumerate() {
+        let (lo, hi) = bbox(x, e, 0.0);
+        hits.clear();
+        tb.query(&lo, &hi, &mut hits);
+        for &ti in &hits {
+            let t = triangles[ti as usize];
+            if e.iter().any(|v| t.contains(v))
+                || filter.is_some_and(|f| !f.edge_face(ai, ti as usize))
+            {
+                continue;
+            }
+            if segment_meets_triangle(
+                &p3(x, e[0]),
+                &p3(x, e[1]),
+                &p3(x, t[0]),
+                &p3(x, t[1]),
+                &p3(x, t[2]),
+            ) {
+                return (
+                    0.0,
+                    Closest3::EdgeThroughTriangle {
+                        a: ai,
+                        t: ti as usize,
+                    },
+                );
+            }
+        }
+    }
+    // the diameter of the configuration bounds every distance
+    let all: Vec<usize> = (0..x.len() / 3).collect();
+    let (lo, hi) = bbox(x, &all, 0.0);
+    let diam = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    let mut r = r0.max(f64::MIN_POSITIVE);
+    loop {
+        let near = near_pairs_3d(x, vertices, edges, triangles, r, filter);
+        let mut best = (f64::INFINITY, Closest3::None);
+        for &(v, t, d) in &near.point_triangle {
+            if d < best.0 {
+                best = (d, Closest3::PointTriangle { x: v, t });
+            }
+        }
+        for &(a, b, d) in &near.edge_edge {
+            if d < best.0 {
+                best = (d, Closest3::EdgeEdge { a, b });
+            }
+        }
+        if best.0.is_finite() || r > 2.0 * diam + 1.0 {
+            return best;
+        }
+        r *= 4.0;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::{check_admissible, point_edge_pairs};
+    use crate::contact::min_distance_brute_force;
     use crate::scene::mesh::{Body, BodyKind};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -450,7 +559,7 @@ mod tests {
                 if skip_fixed && mesh.fixed[v] && mesh.fixed[e[0]] && mesh.fixed[e[1]] {
                     continue;
                 }
-                if filter.is_some_and(|f| !f.vertex_edge(v, a)) {
+                if filter.is_some_and(|f| !f.point_edge(v, a)) {
                     continue;
                 }
                 let d =
@@ -492,16 +601,15 @@ mod tests {
     }
 
     #[test]
-    fn min_distance_near_matches_all_pairs_check() {
+    fn min_distance_2d_matches_brute_force() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let mut crossings = 0;
         for _ in 0..100 {
             let per = rng.gen_range(3..8);
             let mesh = random_mesh(&mut rng, 3, per);
             let x = mesh.x_ref.clone();
-            let (movable, fixed) = point_edge_pairs(&mesh);
-            let want = check_admissible(&mesh, &x, &movable, &fixed);
-            let got = min_distance_near(&mesh, &x, 1e-3, false);
+            let want = min_distance_brute_force(&mesh, &x);
+            let got = min_distance_2d(&mesh, &x, 1e-3, false);
             assert_eq!(got.distance, want.distance);
             if want.distance == 0.0 {
                 crossings += 1;
@@ -554,198 +662,5 @@ mod tests {
             assert!(got.windows(2).all(|w| w[0] < w[1]), "not sorted/unique");
         }
         assert!(found > 200, "too few overlaps tested: {found}");
-    }
-
-    #[test]
-    fn first_crossing_finds_a_planted_crossing_and_ignores_shared_vertices() {
-        // Two edges forming an X, plus a V sharing a vertex.
-        let x = vec![
-            0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 0.0, 3.0, 1.0, 4.0, 0.0,
-        ];
-        let mesh = Mesh {
-            dim: 2,
-            x_ref: x.clone(),
-            fixed: vec![false; 7],
-            edges: vec![[0, 1], [2, 3], [4, 5], [5, 6]],
-            edge_body: vec![0, 1, 2, 2],
-            triangles: vec![],
-            bodies: vec![],
-            ..Default::default()
-        };
-        assert_eq!(first_crossing(&mesh, &x, false), Some((0, 1)));
-        let mut y = x.clone();
-        y[7] = 2.0; // vertex 3 moved to (1, 2): edge [2, 3] parallel to edge [0, 1]
-        assert_eq!(first_crossing(&mesh, &y, false), None);
-    }
-}
-
-/// Disjoint element pairs closer than a radius, found through the BVH of
-/// [`crate::contact::bvh::Bvh`]: the 3D broad phase. Sorted, so the result does not depend on the
-/// thread count.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct NearPairs3 {
-    /// `(vertex, triangle index, distance)`, sorted by vertex then triangle.
-    pub vertex_triangle: Vec<(usize, usize, f64)>,
-    /// `(edge a, edge b, distance)` with `a < b`, sorted.
-    pub edge_edge: Vec<(usize, usize, f64)>,
-}
-
-fn bbox(x: &[f64], vs: &[usize], r: f64) -> crate::contact::broad_phase::Aabb<3> {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for &v in vs {
-        for c in 0..3 {
-            lo[c] = lo[c].min(x[3 * v + c] - r);
-            hi[c] = hi[c].max(x[3 * v + c] + r);
-        }
-    }
-    (lo, hi)
-}
-
-/// Every disjoint vertex–triangle pair (`vertices` × `triangles`, x ∉ T) and edge–edge pair
-/// (a ∩ b = ∅) at distance `< r`, through a BVH over the triangles' and the edges' boxes.
-pub fn near_pairs_3d(
-    x: &[f64],
-    vertices: &[usize],
-    edges: &[[usize; 2]],
-    triangles: &[[usize; 3]],
-    r: f64,
-) -> NearPairs3 {
-    near_pairs_3d_filtered(x, vertices, edges, triangles, r, None)
-}
-
-/// [`near_pairs_3d`] over the pairs a contact filter allows (`None`: all pairs). An excluded
-/// pair is dropped before its distance is computed.
-pub fn near_pairs_3d_filtered(
-    x: &[f64],
-    vertices: &[usize],
-    edges: &[[usize; 2]],
-    triangles: &[[usize; 3]],
-    r: f64,
-    filter: Option<&ContactFilter>,
-) -> NearPairs3 {
-    use crate::contact::bvh::Bvh;
-    let mut out = NearPairs3::default();
-    let mut hits = Vec::new();
-    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
-    let tb = Bvh::<3>::build(&tbox);
-    for &v in vertices {
-        let (lo, hi) = bbox(x, &[v], r);
-        hits.clear();
-        tb.query(&lo, &hi, &mut hits);
-        for &ti in &hits {
-            let t = triangles[ti as usize];
-            if t.contains(&v) || filter.is_some_and(|f| !f.vertex_face(v, ti as usize)) {
-                continue;
-            }
-            let d = point_triangle_distance(&p3(x, v), &p3(x, t[0]), &p3(x, t[1]), &p3(x, t[2]))
-                .distance;
-            if d < r {
-                out.vertex_triangle.push((v, ti as usize, d));
-            }
-        }
-    }
-    let ebox: Vec<_> = edges.iter().map(|e| bbox(x, e, 0.0)).collect();
-    let eb = Bvh::<3>::build(&ebox);
-    for (ai, a) in edges.iter().enumerate() {
-        let (lo, hi) = bbox(x, a, r);
-        hits.clear();
-        eb.query(&lo, &hi, &mut hits);
-        for &bi in &hits {
-            let bi = bi as usize;
-            let b = edges[bi];
-            if bi <= ai
-                || a.iter().any(|v| b.contains(v))
-                || filter.is_some_and(|f| !f.edge_edge(ai, bi))
-            {
-                continue;
-            }
-            let d =
-                edge_edge_distance(&p3(x, a[0]), &p3(x, a[1]), &p3(x, b[0]), &p3(x, b[1])).distance;
-            if d < r {
-                out.edge_edge.push((ai, bi, d));
-            }
-        }
-    }
-    out.vertex_triangle.sort_by_key(|p| (p.0, p.1));
-    out.edge_edge.sort_by_key(|p| (p.0, p.1));
-    out
-}
-
-/// [`min_distance_3d`] through the BVH: edges through triangles among overlapping boxes, then
-/// the near pairs within a radius that starts at `r0` (> 0) and grows ×4 until a pair is found.
-/// Gives the same distance as the O(N²) form (tested).
-pub fn min_distance_3d_bvh(
-    x: &[f64],
-    vertices: &[usize],
-    edges: &[[usize; 2]],
-    triangles: &[[usize; 3]],
-    r0: f64,
-) -> (f64, Closest3) {
-    min_distance_3d_bvh_filtered(x, vertices, edges, triangles, r0, None)
-}
-
-/// [`min_distance_3d_bvh`] over the pairs a contact filter allows (`None`: all pairs).
-pub fn min_distance_3d_bvh_filtered(
-    x: &[f64],
-    vertices: &[usize],
-    edges: &[[usize; 2]],
-    triangles: &[[usize; 3]],
-    r0: f64,
-    filter: Option<&ContactFilter>,
-) -> (f64, Closest3) {
-    use crate::contact::bvh::Bvh;
-    let tbox: Vec<_> = triangles.iter().map(|t| bbox(x, t, 0.0)).collect();
-    let tb = Bvh::<3>::build(&tbox);
-    let mut hits = Vec::new();
-    for (ai, e) in edges.iter().enumerate() {
-        let (lo, hi) = bbox(x, e, 0.0);
-        hits.clear();
-        tb.query(&lo, &hi, &mut hits);
-        for &ti in &hits {
-            let t = triangles[ti as usize];
-            if e.iter().any(|v| t.contains(v))
-                || filter.is_some_and(|f| !f.edge_face(ai, ti as usize))
-            {
-                continue;
-            }
-            if segment_meets_triangle(
-                &p3(x, e[0]),
-                &p3(x, e[1]),
-                &p3(x, t[0]),
-                &p3(x, t[1]),
-                &p3(x, t[2]),
-            ) {
-                return (
-                    0.0,
-                    Closest3::EdgeThroughTriangle {
-                        a: ai,
-                        t: ti as usize,
-                    },
-                );
-            }
-        }
-    }
-    // the diameter of the configuration bounds every distance
-    let all: Vec<usize> = (0..x.len() / 3).collect();
-    let (lo, hi) = bbox(x, &all, 0.0);
-    let diam = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
-    let mut r = r0.max(f64::MIN_POSITIVE);
-    loop {
-        let near = near_pairs_3d_filtered(x, vertices, edges, triangles, r, filter);
-        let mut best = (f64::INFINITY, Closest3::None);
-        for &(v, t, d) in &near.vertex_triangle {
-            if d < best.0 {
-                best = (d, Closest3::VertexTriangle { x: v, t });
-            }
-        }
-        for &(a, b, d) in &near.edge_edge {
-            if d < best.0 {
-                best = (d, Closest3::EdgeEdge { a, b });
-            }
-        }
-        if best.0.is_finite() || r > 2.0 * diam + 1.0 {
-            return best;
-        }
-        r *= 4.0;
     }
 }

@@ -6,13 +6,20 @@
 //!
 //! | pair | dim | rows (`plus`, `minus`) | normal |
 //! |---|---|---|---|
-//! | vertex x, edge a | 2 | `(a_i, x)`, i = 0, 1 (eq. 4) | from ψ(x) to the closest point of ψ(a) |
-//! | vertex x, face T | 3 | `(t_i, x)`, i = 0, 1, 2 (eq. 6) | from ψ(x) to the closest point of ψ(T) |
-//! | edges a, b | 3 | `(b_j, a_i)`, i, j = 0, 1 (eq. 6) | from the closest point of ψ(a) to that of ψ(b) |
+//! | `point_edge`: vertex x, edge a | 2 | `(a_i, x)`, i = 0, 1 (eq. 4) | from ψ(x) to the closest point of ψ(a) |
+//! | `point_triangle`: vertex x, face T | 3 | `(t_i, x)`, i = 0, 1, 2 (eq. 6) | from ψ(x) to the closest point of ψ(T) |
+//! | `edge_edge`: edges a, b | 3 | `(b_j, a_i)`, i, j = 0, 1 (eq. 6) | from the closest point of ψ(a) to that of ψ(b) |
 //!
-//! Each row also carries the barycentric weight of its vertex pair in the closest points
-//! (`α_i`, `β_i`, `(1 − s, s)_i·(1 − t, t)_j`); the weights sum to 1 and give the contact
-//! force of Lemma 5.6 in [`crate::harness::diagnostics`].
+//! By Lemma 4.2 (in 3D with the `edge_edge` rows, Remark 4.3) every φ satisfying the rows is
+//! admissible. Each row also carries the barycentric weight of its vertex pair in the closest
+//! points (`α_i`, `β_i`, `(1 − s, s)_i·(1 − t, t)_j`); the weights sum to 1 and give the
+//! contact force of Lemma 5.6 in [`crate::harness::diagnostics`].
+//!
+//! One module per pair kind, named as the kernels of [`distance`]: [`point_edge`],
+//! [`point_triangle`], [`edge_edge`], each with its enumeration (the all-pairs mode) and its
+//! rows. The broad phase (near-pair searches in both dimensions, the grid, the BVH, the boxes)
+//! is [`broad_phase`] and [`bvh`]; the exact admissibility check of every iterate is
+//! [`admissibility::min_distance`].
 //!
 //! The 2D rows are built exactly as [`crate::contact::point_edge_row`] (same floating-point
 //! operations), so 2D results do not depend on which interface built them.
@@ -26,20 +33,17 @@ pub mod point_edge;
 pub mod point_triangle;
 
 pub use admissibility::{
-    check_admissible, fixed_pairs_admissible, min_distance_3d, min_distance_3d_filtered,
-    min_distance_of_pairs, segment_meets_triangle, Closest3, ClosestPair, MinDistance,
+    min_distance, min_distance_brute_force, segment_meets_triangle, Closest3, ClosestPair,
+    MinDistance,
 };
-pub use broad_phase::{
-    min_distance_3d_bvh, min_distance_3d_bvh_filtered, near_pairs_3d, near_pairs_3d_filtered,
-    NearPairs3,
-};
-pub use edge_edge::edge_edge_rows;
+pub use broad_phase::{near_pairs_3d, NearPairs3};
+pub use edge_edge::{edge_edge_pairs, edge_edge_rows};
 pub use point_edge::{
     min_slack, point_edge_pairs, point_edge_row, point_edge_rows, PointEdgePair, PointEdgeRow,
 };
-pub use point_triangle::vertex_triangle_rows;
+pub use point_triangle::{point_triangle_pairs, point_triangle_rows};
 
-use self::broad_phase::{min_distance_near, point_edge_near};
+use self::broad_phase::point_edge_near;
 use self::distance::{edge_edge_distance, point_edge_distance, point_triangle_distance};
 use crate::scene::mesh::Mesh;
 use nalgebra::Vector3;
@@ -57,7 +61,7 @@ pub enum ContactPair {
         a: usize,
     },
     /// 3D: vertex `x`, contact face `t` (index into [`Mesh::faces`]), `x ∉ t`.
-    VertexTriangle {
+    PointTriangle {
         /// Vertex.
         x: usize,
         /// Face index.
@@ -73,11 +77,12 @@ pub enum ContactPair {
 }
 
 impl ContactPair {
-    /// `point_edge`, `vertex_triangle` or `edge_edge` (CSV).
+    /// `point_edge`, `vertex_triangle` or `edge_edge`: the pair kind in contacts.csv and
+    /// multipliers.csv (`PointTriangle` keeps the name the files had before the renaming).
     pub fn kind(&self) -> &'static str {
         match self {
             ContactPair::PointEdge { .. } => "point_edge",
-            ContactPair::VertexTriangle { .. } => "vertex_triangle",
+            ContactPair::PointTriangle { .. } => "vertex_triangle",
             ContactPair::EdgeEdge { .. } => "edge_edge",
         }
     }
@@ -86,7 +91,7 @@ impl ContactPair {
     pub fn indices(&self) -> (usize, usize) {
         match *self {
             ContactPair::PointEdge { x, a } => (x, a),
-            ContactPair::VertexTriangle { x, t } => (x, t),
+            ContactPair::PointTriangle { x, t } => (x, t),
             ContactPair::EdgeEdge { a, b } => (a, b),
         }
     }
@@ -110,7 +115,7 @@ pub struct PairRows {
     pub plus: [usize; 4],
     /// Near-side vertex of each row.
     pub minus: [usize; 4],
-    /// Number of rows: 2 (point–edge), 3 (vertex–triangle) or 4 (edge–edge).
+    /// Number of rows: 2 (`point_edge`), 3 (`point_triangle`) or 4 (`edge_edge`).
     pub len: usize,
     /// `dist` of the pair at ψ.
     pub distance: f64,
@@ -167,7 +172,7 @@ pub fn pair_rows(mesh: &Mesh, psi: &[f64], pair: ContactPair) -> Option<PairRows
                 dim: 2,
             })
         }
-        ContactPair::VertexTriangle { x, t } => {
+        ContactPair::PointTriangle { x, t } => {
             let f = mesh.faces[t];
             let px = p3(psi, x);
             let q = point_triangle_distance(&px, &p3(psi, f[0]), &p3(psi, f[1]), &p3(psi, f[2]));
@@ -227,7 +232,7 @@ pub fn all_fixed(mesh: &Mesh, pair: ContactPair) -> bool {
             let e = mesh.edges[a];
             f[x] && f[e[0]] && f[e[1]]
         }
-        ContactPair::VertexTriangle { x, t } => f[x] && mesh.faces[t].iter().all(|&v| f[v]),
+        ContactPair::PointTriangle { x, t } => f[x] && mesh.faces[t].iter().all(|&v| f[v]),
         ContactPair::EdgeEdge { a, b } => {
             mesh.edges[a].iter().all(|&v| f[v]) && mesh.edges[b].iter().all(|&v| f[v])
         }
@@ -235,8 +240,8 @@ pub fn all_fixed(mesh: &Mesh, pair: ContactPair) -> bool {
 }
 
 /// Every pair of disjoint contact elements with a free vertex that the contact filter allows
-/// (the all-pairs mode): 2D
-/// point–edge pairs; 3D vertex–face and edge–edge pairs. O(N²).
+/// (the all-pairs mode, O(N²)): 2D [`point_edge_pairs`]; 3D [`point_triangle_pairs`], then
+/// [`edge_edge_pairs`].
 pub fn all_movable_pairs(mesh: &Mesh) -> Vec<ContactPair> {
     if mesh.dim == 2 {
         return point_edge_pairs(mesh)
@@ -245,23 +250,8 @@ pub fn all_movable_pairs(mesh: &Mesh) -> Vec<ContactPair> {
             .map(Into::into)
             .collect();
     }
-    let mut out = Vec::new();
-    let verts = mesh.contact_vertices();
-    let filter = mesh.filter();
-    for &x in &verts {
-        for (t, f) in mesh.faces.iter().enumerate() {
-            if !f.contains(&x) && filter.is_none_or(|fl| fl.vertex_face(x, t)) {
-                out.push(ContactPair::VertexTriangle { x, t });
-            }
-        }
-    }
-    for (a, ea) in mesh.edges.iter().enumerate() {
-        for (b, eb) in mesh.edges.iter().enumerate().skip(a + 1) {
-            if !ea.iter().any(|v| eb.contains(v)) && filter.is_none_or(|fl| fl.edge_edge(a, b)) {
-                out.push(ContactPair::EdgeEdge { a, b });
-            }
-        }
-    }
+    let mut out = point_triangle_pairs(mesh);
+    out.extend(edge_edge_pairs(mesh));
     out.retain(|&p| !all_fixed(mesh, p));
     out
 }
@@ -276,7 +266,7 @@ pub fn near_pairs(mesh: &Mesh, x: &[f64], r: f64, skip_fixed: bool) -> Vec<Conta
             .map(|p| p.pair.into())
             .collect();
     }
-    let near = near_pairs_3d_filtered(
+    let near = near_pairs_3d(
         x,
         &mesh.contact_vertices(),
         &mesh.edges,
@@ -285,9 +275,9 @@ pub fn near_pairs(mesh: &Mesh, x: &[f64], r: f64, skip_fixed: bool) -> Vec<Conta
         mesh.filter(),
     );
     let mut out: Vec<ContactPair> = near
-        .vertex_triangle
+        .point_triangle
         .iter()
-        .map(|&(x, t, _)| ContactPair::VertexTriangle { x, t })
+        .map(|&(x, t, _)| ContactPair::PointTriangle { x, t })
         .chain(
             near.edge_edge
                 .iter()
@@ -298,42 +288,6 @@ pub fn near_pairs(mesh: &Mesh, x: &[f64], r: f64, skip_fixed: bool) -> Vec<Conta
         out.retain(|&p| !all_fixed(mesh, p));
     }
     out
-}
-
-/// The exact admissibility check: the minimum distance over every pair of disjoint contact
-/// elements (and 0 for crossing edges in 2D, an edge through a face in 3D). 2D:
-/// [`min_distance_near`] (with `skip_fixed`, the all-fixed pairs, checked once at the start,
-/// are left out); 3D: [`min_distance_3d_bvh`] over all pairs (`skip_fixed` is ignored: the
-/// check is over every pair, the constant ones included). `r0 > 0` is the initial search
-/// radius.
-pub fn min_distance(mesh: &Mesh, x: &[f64], r0: f64, skip_fixed: bool) -> MinDistance {
-    if mesh.dim == 2 {
-        return min_distance_near(mesh, x, r0, skip_fixed);
-    }
-    let (distance, c) = min_distance_3d_bvh_filtered(
-        x,
-        &mesh.contact_vertices(),
-        &mesh.edges,
-        &mesh.faces,
-        r0,
-        mesh.filter(),
-    );
-    let pair = match c {
-        Closest3::VertexTriangle { x, t } => ClosestPair::VertexTriangle {
-            x,
-            t,
-            face: mesh.faces[t],
-        },
-        Closest3::EdgeEdge { a, b } => ClosestPair::Segments {
-            a,
-            b,
-            ea: mesh.edges[a],
-            eb: mesh.edges[b],
-        },
-        Closest3::EdgeThroughTriangle { a, t } => ClosestPair::EdgeThroughFace { a, t },
-        Closest3::None => ClosestPair::None,
-    };
-    MinDistance { distance, pair }
 }
 
 /// Per-vertex Euclidean displacement `|y(v) − x(v)|` in dimension `dim`.
@@ -382,9 +336,9 @@ pub fn p3(x: &[f64], v: usize) -> Vector3<f64> {
     Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])
 }
 
-/// All rows of T(ψ) for the given elements (every disjoint vertex–triangle pair and every
+/// All rows of T(ψ) for the given elements (every disjoint point–triangle pair and every
 /// disjoint edge–edge pair, all pairs); `None` when some pair is at distance 0. With
-/// `edge_edge = false`, the vertex–triangle rows only (the master/slave simplification of
+/// `edge_edge = false`, the point–triangle rows only (the master/slave simplification of
 /// Remark 4.3, kept to show what it misses).
 pub fn all_rows_3d(
     psi: &[f64],
@@ -399,7 +353,7 @@ pub fn all_rows_3d(
             if t.contains(&v) {
                 continue;
             }
-            rows.extend_from_slice(&vertex_triangle_rows(psi, v, *t)?.0);
+            rows.extend_from_slice(&point_triangle_rows(psi, v, *t)?.0);
         }
     }
     if edge_edge {

@@ -16,7 +16,7 @@ use crate::scene::mesh::Mesh;
 use nalgebra::Vector2;
 use rayon::prelude::*;
 
-/// A vertex–edge pair: vertex `x`, contact edge index `a` (into [`Mesh::edges`]), `x ∉ a`.
+/// A point–edge pair: vertex `x`, contact edge index `a` (into [`Mesh::edges`]), `x ∉ a`.
 /// Ordered by vertex, then edge (the order of the broad phase's output).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct PointEdgePair {
@@ -39,7 +39,7 @@ pub fn point_edge_pairs(mesh: &Mesh) -> (Vec<PointEdgePair>, Vec<PointEdgePair>)
             if x == e[0] || x == e[1] {
                 continue;
             }
-            if filter.is_some_and(|f| !f.vertex_edge(x, a)) {
+            if filter.is_some_and(|f| !f.point_edge(x, a)) {
                 continue;
             }
             let pair = PointEdgePair { x, a };

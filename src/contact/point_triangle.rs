@@ -11,11 +11,27 @@
 //! Lemma 4.2, tested in `tests/lemma42_3d.rs`.
 
 use super::distance::point_triangle_distance;
-use super::{p3, Row3};
+use super::{p3, ContactPair, Row3};
+use crate::scene::mesh::Mesh;
 
-/// The three rows of the vertex–triangle pair (x, t) at ψ, with ψ's distance; `None` at
+/// Every `point_triangle` pair (contact vertex x, contact face t, x ∉ t) that the contact
+/// filter allows, sorted by vertex then face (all pairs, O(N²): the all-pairs mode).
+pub fn point_triangle_pairs(mesh: &Mesh) -> Vec<ContactPair> {
+    let mut out = Vec::new();
+    let filter = mesh.filter();
+    for &x in &mesh.contact_vertices() {
+        for (t, f) in mesh.faces.iter().enumerate() {
+            if !f.contains(&x) && filter.is_none_or(|fl| fl.point_triangle(x, t)) {
+                out.push(ContactPair::PointTriangle { x, t });
+            }
+        }
+    }
+    out
+}
+
+/// The three rows of the `point_triangle` pair (x, t) at ψ, with ψ's distance; `None` at
 /// distance 0 (no normal) or when x is a vertex of t.
-pub fn vertex_triangle_rows(psi: &[f64], x: usize, t: [usize; 3]) -> Option<([Row3; 3], f64)> {
+pub fn point_triangle_rows(psi: &[f64], x: usize, t: [usize; 3]) -> Option<([Row3; 3], f64)> {
     if t.contains(&x) {
         return None;
     }

@@ -34,7 +34,7 @@ pub fn contact_pattern(
             continue;
         }
         match p {
-            ContactPair::PointEdge { x: v, a } | ContactPair::VertexTriangle { x: v, t: a } => {
+            ContactPair::PointEdge { x: v, a } | ContactPair::PointTriangle { x: v, t: a } => {
                 let be = if matches!(p, ContactPair::PointEdge { .. }) {
                     mesh.edge_body[a]
                 } else {
@@ -490,7 +490,7 @@ pub fn converged_diagnostics(
                 *per_element.entry((0, a)).or_insert(0) += 1;
                 *per_vertex.entry(x).or_insert(0) += 1;
             }
-            ContactPair::VertexTriangle { x, t } => {
+            ContactPair::PointTriangle { x, t } => {
                 *per_element.entry((1, t)).or_insert(0) += 1;
                 *per_vertex.entry(x).or_insert(0) += 1;
             }

@@ -37,7 +37,7 @@
 
 use super::sheets::unique_edges;
 use super::Scene;
-use crate::contact::min_distance_3d_bvh;
+use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gas3dEnergy, Membrane3dEnergy, OpenSurface, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use nalgebra::{Rotation3, Vector3};
@@ -433,8 +433,7 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
         contact_filter: None,
     };
     mesh.validate()?;
-    let (distance, pair) =
-        min_distance_3d_bvh(&x, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
+    let (distance, pair) = min_distance_3d(&mesh, &x, eps);
     if distance < eps {
         return Err(Balloons3dError::InadmissibleStart {
             pair: format!("{pair:?}"),
@@ -512,7 +511,7 @@ mod tests {
         }
         assert!((s.h - mesh_size(&Balloons3dParams::default())).abs() < 1e-15);
         assert!((s.eps - (s.h / 10.0).min(0.025)).abs() < 1e-15);
-        let (d, _) = min_distance_3d_bvh(&s.x0, &m.contact_vertices(), &m.edges, &m.faces, s.eps);
+        let (d, _) = min_distance_3d(m, &s.x0, s.eps);
         assert!(d >= s.eps, "{d}");
         assert!((d - 0.05).abs() < 1e-12, "{d}"); // the pads
         assert!(s.energy.value(&s.x0).is_finite());

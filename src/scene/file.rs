@@ -1793,7 +1793,7 @@ fn describe(mesh: &Mesh, names: &[String], pair: &ClosestPair) -> String {
     match *pair {
         ClosestPair::PointEdge { x, a, .. } => format!("{} and {}", vb(x), eb(a)),
         ClosestPair::EdgeEdge { a, b } => format!("{} and {} (crossing)", eb(a), eb(b)),
-        ClosestPair::VertexTriangle { x, t, .. } => format!("{} and {}", vb(x), fb(t)),
+        ClosestPair::PointTriangle { x, t, .. } => format!("{} and {}", vb(x), fb(t)),
         ClosestPair::Segments { a, b, .. } => format!("{} and {}", eb(a), eb(b)),
         ClosestPair::EdgeThroughFace { a, t } => {
             format!("{} and {} (the edge passes through the face)", eb(a), fb(t))

@@ -212,13 +212,13 @@ impl ContactFilter {
 
     /// Vertex `x` with contact edge `a`.
     #[inline]
-    pub fn vertex_edge(&self, x: usize, a: usize) -> bool {
+    pub fn point_edge(&self, x: usize, a: usize) -> bool {
         self.vertex_body(x, self.edge_body[a])
     }
 
     /// Vertex `x` with contact face `t` (3D).
     #[inline]
-    pub fn vertex_face(&self, x: usize, t: usize) -> bool {
+    pub fn point_triangle(&self, x: usize, t: usize) -> bool {
         self.vertex_body(x, self.face_body[t])
     }
 

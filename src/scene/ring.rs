@@ -33,7 +33,7 @@
 //! stretched membrane makes the Hessian positive definite.
 
 use super::Scene;
-use crate::contact::broad_phase::{min_distance_near, point_edge_near, NearPair};
+use crate::contact::broad_phase::{min_distance_2d, point_edge_near, NearPair};
 use crate::energy::{MembraneEnergy, PressureEnergy, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh};
 use thiserror::Error;
@@ -230,7 +230,7 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
         }],
         ..Default::default()
     };
-    let md = min_distance_near(&mesh, &x0, 2.0 * eps, false);
+    let md = min_distance_2d(&mesh, &x0, 2.0 * eps, false);
     if md.distance < eps {
         return Err(RingError::InadmissibleStart {
             half_span: p.half_span,

@@ -49,7 +49,7 @@
 //! crossing. With the four pins and every strand in tension there is no zero-energy motion.
 
 use super::Scene;
-use crate::contact::min_distance_3d_bvh;
+use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity3d, String3dEnergy, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
@@ -342,8 +342,7 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
         contact_filter: None,
     };
     mesh.validate()?;
-    let (distance, pair) =
-        min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
+    let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
         return Err(RodError::InadmissibleStart {
             height: p.height,
@@ -394,7 +393,7 @@ mod tests {
         assert_eq!(p3(&s.x0, 46), nalgebra::Vector3::new(0.0, 1.0, 0.3));
         assert!((s.h - 2.4 / 17.0).abs() < 1e-15);
         assert!((s.eps - s.h / 10.0).abs() < 1e-15);
-        let (d, _) = min_distance_3d_bvh(&s.x0, &m.contact_vertices(), &m.edges, &[], s.eps);
+        let (d, _) = min_distance_3d(m, &s.x0, s.eps);
         assert!(d >= s.eps, "{d}");
         assert!(s.energy.value(&s.x0).is_finite());
         // each contact edge once

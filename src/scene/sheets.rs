@@ -49,7 +49,7 @@
 //! 2 steps even at `weight = 0.3`.
 
 use super::Scene;
-use crate::contact::min_distance_3d_bvh;
+use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity3d, Membrane3dEnergy, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
@@ -308,8 +308,7 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
         contact_filter: None,
     };
     mesh.validate()?;
-    let (distance, pair) =
-        min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
+    let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
         return Err(SheetsError::InadmissibleStart {
             pair: format!("{pair:?}"),
@@ -366,7 +365,7 @@ mod tests {
         assert!(h / 10.0 > 0.025);
         assert_eq!(s.eps, 0.025); // gap/2 < h/10
                                   // admissible: the closest pair is between the sheets, at the gap
-        let (d, _) = min_distance_3d_bvh(&s.x0, &m.contact_vertices(), &m.edges, &m.faces, s.eps);
+        let (d, _) = min_distance_3d(m, &s.x0, s.eps);
         assert!(d >= s.eps, "{d}");
         assert!((d - 0.05).abs() < 1e-12, "{d}");
         // J(x0) finite; the membranes are stretched: positive elastic energy, below weight·z

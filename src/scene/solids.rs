@@ -36,7 +36,7 @@
 
 use super::sheets::unique_edges;
 use super::Scene;
-use crate::contact::min_distance_3d_bvh;
+use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
 use nalgebra::Vector3;
@@ -313,8 +313,7 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         contact_filter: None,
     };
     mesh.validate()?;
-    let (distance, pair) =
-        min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
+    let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
         return Err(SolidsError::InadmissibleStart {
             pair: format!("{pair:?}"),
@@ -382,7 +381,7 @@ mod tests {
         assert_eq!(m.fixed.iter().filter(|&&f| f).count(), 32);
         assert!((s.h - 3f64.sqrt() / 3.0).abs() < 1e-15);
         assert!((s.eps - 0.05).abs() < 1e-15); // gap/2 < h/10
-        let (d, _) = min_distance_3d_bvh(&s.x0, &m.contact_vertices(), &m.edges, &m.faces, s.eps);
+        let (d, _) = min_distance_3d(m, &s.x0, s.eps);
         assert!(d >= s.eps, "{d}");
         assert!((d - 0.1).abs() < 1e-12, "{d}"); // the gap
         let j = s.energy.value(&s.x0);
