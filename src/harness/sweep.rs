@@ -18,7 +18,7 @@ use crate::harness::diagnostics::h1_distance;
 use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
-use crate::solve::settings::Accuracy;
+use crate::solve::settings::{Accuracy, RunSettings};
 use anyhow::{bail, Context, Result};
 use contactlab_solvers::BACKEND_NAMES;
 use rayon::prelude::*;
@@ -405,15 +405,6 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             )
         })?;
         let tol_j = b.common.tol_j.or(file.defaults.tol_j);
-        if let Some(t) = tol_j {
-            if !(t > 0.0 && t.is_finite()) {
-                bail!(
-                    "scene block {} ({}): tol_j = {t} must be finite and > 0",
-                    bi + 1,
-                    b.name
-                );
-            }
-        }
         let max_outer = b
             .common
             .max_outer
@@ -421,25 +412,39 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             .unwrap_or(2000);
         let max_inner = b.common.max_inner.or(file.defaults.max_inner);
         let time_limit_s = b.common.time_limit_s.or(file.defaults.time_limit_s);
-        if let Some(t) = time_limit_s {
-            if t.is_nan() || t <= 0.0 {
-                bail!(
-                    "scene block {} ({}): time_limit_s = {t} must be > 0",
-                    bi + 1,
-                    b.name
-                );
-            }
-            if b.dynamic {
-                bail!(
-                    "scene block {} ({}): time_limit_s applies to static runs only (a dynamic run solves one problem per step)",
-                    bi + 1,
-                    b.name
-                );
+        // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
+        // file does not set at their defaults).
+        for be in backends
+            .iter()
+            .map(String::as_str)
+            .chain(backends.is_empty().then_some("clarabel"))
+        {
+            let rs = RunSettings {
+                backend: be.to_string(),
+                tol_j,
+                max_outer,
+                max_inner: max_inner.unwrap_or(RunSettings::default().max_inner),
+                time_limit_s,
+                ..RunSettings::default()
+            };
+            if let Err(e) = rs.validate() {
+                let block = format!("scene block {} ({})", bi + 1, b.name);
+                match e.key {
+                    "max_outer" | "max_inner" => {
+                        bail!("{block}: max_outer and max_inner must be ≥ 1")
+                    }
+                    "backend" => bail!(
+                        "{block}: unknown backend {} (available: {})",
+                        e.value,
+                        BACKEND_NAMES.join(", ")
+                    ),
+                    _ => bail!("{block}: {} = {} {}", e.key, e.value, e.rule),
+                }
             }
         }
-        if max_outer == 0 || max_inner == Some(0) {
+        if time_limit_s.is_some() && b.dynamic {
             bail!(
-                "scene block {} ({}): max_outer and max_inner must be ≥ 1",
+                "scene block {} ({}): time_limit_s applies to static runs only (a dynamic run solves one problem per step)",
                 bi + 1,
                 b.name
             );
@@ -449,16 +454,6 @@ pub fn expand(file: &SweepFile) -> Result<Vec<RunSpec>> {
             .reference
             .clone()
             .or_else(|| file.defaults.reference.clone());
-        for be in &backends {
-            if !BACKEND_NAMES.contains(&be.as_str()) {
-                bail!(
-                    "scene block {} ({}): unknown backend {be:?} (available: {})",
-                    bi + 1,
-                    b.name,
-                    BACKEND_NAMES.join(", ")
-                );
-            }
-        }
         let mut accuracy = Vec::new();
         for a in &accs {
             accuracy.push(Accuracy::from_name(a).with_context(|| {
