@@ -1,7 +1,7 @@
 //! The `contactlab` command line.
 //!
-//! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend clarabel|clarabel-reuse|osqp|uzawa] [--n 40] [--out DIR] …` runs the
-//! outer loop on a scene and writes a run directory (docs/run-directory.md); `contactlab run path/to/scene.toml`
+//! `contactlab run [balloons|ring|sheets|rod|solids|balloons3d] [--backend NAME] [--n 40] [--out DIR] …` runs the
+//! outer loop on a scene (backend names: `contactlab_solvers::registry`) and writes a run directory (docs/run-directory.md); `contactlab run path/to/scene.toml`
 //! runs a scene file (docs/scene-files.md). Exit codes: 0 a run
 //! converged (or a command succeeded), 1 a run finished with a failure status (its directory
 //! written), 2 an error (bad input, inadmissible start, a violated guarantee), 101 a panic.

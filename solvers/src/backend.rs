@@ -3,10 +3,6 @@
 use crate::qp::Qp;
 use thiserror::Error;
 
-/// Names accepted by [`backend_from_name`].
-/// `clarabel-reuse` is Clarabel keeping its solver between QPs of one structure (data updates).
-pub const BACKEND_NAMES: [&str; 4] = ["clarabel", "clarabel-reuse", "osqp", "uzawa"];
-
 /// Invalid input to a backend. Non-convergence is NOT an error: it is a [`QpStatus`].
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum QpError {
@@ -74,7 +70,7 @@ pub enum QpError {
         /// Why it is rejected.
         reason: &'static str,
     },
-    /// The backend name is not one of [`BACKEND_NAMES`].
+    /// The backend name is not one of [`crate::BACKEND_NAMES`].
     #[error("unknown backend {0:?} (expected one of clarabel, osqp, uzawa)")]
     UnknownBackend(String),
     /// Warm start vectors of the wrong length.
@@ -211,40 +207,4 @@ pub trait QpBackend: Send {
     fn name(&self) -> &'static str;
     /// Solves `qp`, optionally from a warm start.
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError>;
-}
-
-/// Builds a backend from its name and the common settings.
-pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn QpBackend>, QpError> {
-    settings.validate()?;
-    match name {
-        "clarabel" => Ok(Box::new(crate::clarabel_backend::ClarabelBackend::new(
-            settings.clone(),
-        ))),
-        "clarabel-reuse" => Ok(Box::new(
-            crate::clarabel_backend::ClarabelBackend::with_reuse(settings.clone()),
-        )),
-        "osqp" => Ok(Box::new(crate::osqp_backend::OsqpBackend::new(
-            settings.clone(),
-        ))),
-        "uzawa" => Ok(Box::new(crate::uzawa::UzawaBackend::new(settings.clone()))),
-        other => Err(QpError::UnknownBackend(other.to_string())),
-    }
-}
-
-/// Default settings of each backend, as measured on the balloons scene (README, "Choosing a
-/// backend"): Clarabel at `1e-9`; Uzawa at `1e-8` (at `1e-9` its accelerated dual ascent hit
-/// 10⁵ steps near the fixed point at n = 8, with violation 6e-9); OSQP (ADMM, with solution
-/// polishing) at `1e-6` (at `1e-9` it needed 10⁴–10⁵ iterations per QP and hit its iteration
-/// limit near the fixed point, while at `1e-6` polishing recovers the active-set solution).
-pub fn default_settings(name: &str) -> QpSettings {
-    let tol = match name {
-        "osqp" => 1e-6,
-        "uzawa" => 1e-8,
-        _ => 1e-9,
-    };
-    QpSettings {
-        eps_abs: tol,
-        eps_rel: tol,
-        ..QpSettings::default()
-    }
 }

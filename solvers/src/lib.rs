@@ -14,22 +14,29 @@
 //! `y_i ≥ 0` when the upper bound is active and `y_i = 0` on inactive rows. A contact row
 //! `n·(φ(a_i) − φ(x)) ≥ ε` is a lower bound, so its multiplier is `−y_i ≥ 0`.
 //!
-//! The core library never imports a backend: it talks to [`QpBackend`] only, and the binary
-//! picks one by name with [`backend_from_name`].
+//! The core library never imports a backend: it talks to [`QpBackend`] only, and picks one by
+//! name with [`backend_from_name`] from the one list of backends, [`registry`] (names,
+//! constructors, default settings, preset tolerances). Sparse linear algebra that is not a
+//! backend (the `LDLᵀ` factorization) lives in [`linalg`], which the core may use.
+//!
+//! **Adding a backend** touches three files: its module, its `mod` line below, and its entry
+//! in [`registry::BACKENDS`] (example in [`registry`]).
 #![warn(missing_docs)]
 // Index loops over several parallel arrays are the clearest form for the sparse kernels here.
 #![allow(clippy::needless_range_loop)]
 
 pub mod backend;
 pub mod clarabel_backend;
+pub mod linalg;
 pub mod osqp_backend;
 pub mod qp;
 pub mod qps;
+pub mod registry;
 pub mod uzawa;
 
-pub use backend::{
-    backend_from_name, default_settings, QpBackend, QpError, QpSettings, QpSolution, QpStatus,
-    WarmStart, BACKEND_NAMES,
-};
+pub use backend::{QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart};
 pub use qp::{CscMatrix, Qp};
 pub use qps::{read_qps, read_qps_file, write_qps, write_qps_file, QpsError};
+pub use registry::{
+    backend_from_name, default_settings, preset_tolerances, PresetTolerances, BACKEND_NAMES,
+};

@@ -4,12 +4,12 @@
 //! # Internal form
 //!
 //! `P` must be positive definite (the caller adds a proximal term); it is factorized **once per
-//! solve** with a sparse up-looking `LDLᵀ` ([`SparseLdl`], the QDLDL algorithm: elimination
+//! solve** with a sparse up-looking `LDLᵀ` ([`crate::linalg::SparseLdl`], the QDLDL algorithm: elimination
 //! tree, column counts, numeric factorization; natural ordering, which suits the banded-ish
 //! `P` of contactlab). A failed factorization (`P` not positive definite) returns status
 //! `NumericalError`.
 //!
-//! The symbolic phase ([`LdlSymbolic`]: elimination tree and column counts, which depend on the
+//! The symbolic phase ([`crate::linalg::LdlSymbolic`]: elimination tree and column counts, which depend on the
 //! pattern of `P` only) is kept by the backend together with the pattern it was computed for,
 //! and reused by the next solve whose `P` has exactly that pattern (same `n`, column pointers
 //! and row indices; explicit zeros count as entries): only the numeric phase then runs, and its
@@ -58,6 +58,7 @@
 //! are checked as in the other backends (empty = not given, else `n` / `m`).
 
 use crate::backend::{QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart};
+use crate::linalg::{LdlSymbolic, SparseLdl};
 use crate::qp::{CscMatrix, Qp};
 use std::time::Instant;
 
@@ -86,208 +87,6 @@ impl UzawaBackend {
     /// of QPs sharing one pattern counts 1.
     pub fn symbolic_phases(&self) -> usize {
         self.symbolic_phases
-    }
-}
-
-const NONE: usize = usize::MAX;
-
-/// Symbolic phase of [`SparseLdl`] for one sparsity pattern: the elimination tree and the column
-/// pointers of `L` (from the column counts), together with the pattern (`ncols`, `colptr`,
-/// `rowval` of the upper triangle) it was computed for. It depends on the pattern only, never on
-/// the values.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LdlSymbolic {
-    n: usize,
-    colptr: Vec<usize>,
-    rowval: Vec<usize>,
-    etree: Vec<usize>,
-    lp: Vec<usize>,
-}
-
-impl LdlSymbolic {
-    /// Elimination tree and column counts of the symmetric matrix whose upper triangle is `a`
-    /// (square, CSC, sorted rows). Returns `None` when `a` is not square or has an entry below
-    /// the diagonal.
-    pub fn new(a: &CscMatrix) -> Option<LdlSymbolic> {
-        let n = a.ncols;
-        if a.nrows != n {
-            return None;
-        }
-        let mut work = vec![NONE; n];
-        let mut lnz = vec![0usize; n];
-        let mut etree = vec![NONE; n];
-        for j in 0..n {
-            work[j] = j;
-            for p in a.colptr[j]..a.colptr[j + 1] {
-                let mut i = a.rowval[p];
-                if i > j {
-                    return None;
-                }
-                while work[i] != j {
-                    if etree[i] == NONE {
-                        etree[i] = j;
-                    }
-                    lnz[i] += 1;
-                    work[i] = j;
-                    i = etree[i];
-                    if i == NONE {
-                        break;
-                    }
-                }
-            }
-        }
-        let mut lp = vec![0usize; n + 1];
-        for i in 0..n {
-            lp[i + 1] = lp[i] + lnz[i];
-        }
-        Some(LdlSymbolic {
-            n,
-            colptr: a.colptr[..=n].to_vec(),
-            rowval: a.rowval[..a.colptr[n]].to_vec(),
-            etree,
-            lp,
-        })
-    }
-
-    /// Whether `a` has exactly the pattern this symbolic phase was computed for (same shape,
-    /// column pointers and row indices; the values are free).
-    pub fn matches(&self, a: &CscMatrix) -> bool {
-        a.nrows == self.n
-            && a.ncols == self.n
-            && a.colptr.len() == self.n + 1
-            && a.colptr == self.colptr
-            && a.rowval.get(..self.colptr[self.n]) == Some(&self.rowval[..])
-    }
-
-    /// Number of entries of `L` below the diagonal.
-    pub fn nnz_l(&self) -> usize {
-        self.lp[self.n]
-    }
-}
-
-/// Sparse `LDLᵀ` factorization of a symmetric matrix given by its upper triangle (QDLDL
-/// algorithm, natural ordering). Used as a Cholesky: it fails unless every pivot is positive.
-#[derive(Clone, Debug)]
-pub struct SparseLdl {
-    n: usize,
-    lp: Vec<usize>,
-    li: Vec<usize>,
-    lx: Vec<f64>,
-    dinv: Vec<f64>,
-}
-
-impl SparseLdl {
-    /// Factorizes the matrix whose upper triangle is `a` (square, CSC, sorted rows). Returns
-    /// `None` when `a` is not square, has an entry below the diagonal, or a pivot is not
-    /// positive (relative to the largest diagonal entry) or not finite. Same as
-    /// [`LdlSymbolic::new`] followed by [`SparseLdl::numeric`].
-    pub fn factor(a: &CscMatrix) -> Option<SparseLdl> {
-        SparseLdl::numeric(a, &LdlSymbolic::new(a)?)
-    }
-
-    /// Numeric phase: factorizes `a` with the symbolic phase `sym` of its pattern, skipping the
-    /// elimination tree and column counts. The result is bit-identical to [`SparseLdl::factor`]
-    /// of `a`. Returns `None` when `a` does not have the pattern of `sym`
-    /// ([`LdlSymbolic::matches`]) or a pivot is not positive (relative to the largest diagonal
-    /// entry) or not finite.
-    pub fn numeric(a: &CscMatrix, sym: &LdlSymbolic) -> Option<SparseLdl> {
-        if !sym.matches(a) {
-            return None;
-        }
-        let n = sym.n;
-        let etree = &sym.etree;
-        let lp = sym.lp.clone();
-        let nnz = lp[n];
-        let mut li = vec![0usize; nnz];
-        let mut lx = vec![0.0; nnz];
-        let mut d = vec![0.0; n];
-        let mut dinv = vec![0.0; n];
-        let mut y_markers = vec![false; n];
-        let mut y_idx = vec![0usize; n];
-        let mut elim = vec![0usize; n];
-        let mut next_space = lp[..n].to_vec();
-        let mut y_vals = vec![0.0; n];
-        let max_diag = (0..n)
-            .flat_map(|j| (a.colptr[j]..a.colptr[j + 1]).filter(move |&p| a.rowval[p] == j))
-            .fold(0.0f64, |m, p| m.max(a.nzval[p].abs()));
-        let pivot_tol = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
-        for k in 0..n {
-            let mut nnz_y = 0;
-            d[k] = 0.0;
-            for p in a.colptr[k]..a.colptr[k + 1] {
-                let b = a.rowval[p];
-                if b == k {
-                    d[k] += a.nzval[p];
-                    continue;
-                }
-                y_vals[b] = a.nzval[p];
-                if !y_markers[b] {
-                    y_markers[b] = true;
-                    elim[0] = b;
-                    let mut nnz_e = 1;
-                    let mut next = etree[b];
-                    while next != NONE && next < k {
-                        if y_markers[next] {
-                            break;
-                        }
-                        y_markers[next] = true;
-                        elim[nnz_e] = next;
-                        nnz_e += 1;
-                        next = etree[next];
-                    }
-                    while nnz_e > 0 {
-                        nnz_e -= 1;
-                        y_idx[nnz_y] = elim[nnz_e];
-                        nnz_y += 1;
-                    }
-                }
-            }
-            for i in (0..nnz_y).rev() {
-                let c = y_idx[i];
-                let tmp = next_space[c];
-                let yc = y_vals[c];
-                for j in lp[c]..tmp {
-                    y_vals[li[j]] -= lx[j] * yc;
-                }
-                li[tmp] = k;
-                lx[tmp] = yc * dinv[c];
-                d[k] -= yc * lx[tmp];
-                next_space[c] += 1;
-                y_vals[c] = 0.0;
-                y_markers[c] = false;
-            }
-            if !(d[k].is_finite() && d[k] > pivot_tol) {
-                return None;
-            }
-            dinv[k] = 1.0 / d[k];
-        }
-        Some(SparseLdl {
-            n,
-            lp,
-            li,
-            lx,
-            dinv,
-        })
-    }
-
-    /// Solves `S x = b` in place.
-    pub fn solve_in_place(&self, x: &mut [f64]) {
-        for i in 0..self.n {
-            let xi = x[i];
-            for j in self.lp[i]..self.lp[i + 1] {
-                x[self.li[j]] -= self.lx[j] * xi;
-            }
-        }
-        for i in 0..self.n {
-            x[i] *= self.dinv[i];
-        }
-        for i in (0..self.n).rev() {
-            let mut s = x[i];
-            for j in self.lp[i]..self.lp[i + 1] {
-                s -= self.lx[j] * x[self.li[j]];
-            }
-            x[i] = s;
-        }
     }
 }
 
@@ -650,33 +449,6 @@ mod tests {
     use super::*;
 
     use crate::qp::tests::small_qp;
-
-    #[test]
-    fn ldl_solves_a_banded_system() {
-        // Tridiagonal SPD with an extra corner entry.
-        let n = 6;
-        let mut t = Vec::new();
-        for i in 0..n {
-            t.push((i, i, 4.0));
-            if i + 1 < n {
-                t.push((i, i + 1, -1.0));
-            }
-        }
-        t.push((0, n - 1, 0.5));
-        let s = CscMatrix::from_triplets(n, n, &t).unwrap();
-        let f = SparseLdl::factor(&s).unwrap();
-        let b: Vec<f64> = (0..n).map(|i| i as f64 - 2.0).collect();
-        let mut x = b.clone();
-        f.solve_in_place(&mut x);
-        let mut r = vec![0.0; n];
-        s.sym_upper_mul_add(1.0, &x, &mut r);
-        for i in 0..n {
-            assert!((r[i] - b[i]).abs() < 1e-12);
-        }
-        // Indefinite → None.
-        let bad = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (0, 1, 2.0), (1, 1, 1.0)]).unwrap();
-        assert!(SparseLdl::factor(&bad).is_none());
-    }
 
     #[test]
     fn solves_small_qp_with_crate_dual_signs() {

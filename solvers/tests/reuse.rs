@@ -11,8 +11,9 @@
 //! `cargo test --release -p contactlab-solvers --test reuse -- --ignored --nocapture`.
 
 use contactlab_solvers::clarabel_backend::ClarabelBackend;
+use contactlab_solvers::linalg::{LdlSymbolic, SparseLdl};
 use contactlab_solvers::osqp_backend::{OsqpBackend, OSQP_INFTY};
-use contactlab_solvers::uzawa::{LdlSymbolic, SparseLdl, UzawaBackend};
+use contactlab_solvers::uzawa::UzawaBackend;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpSettings, QpSolution, QpStatus, WarmStart};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -69,7 +69,7 @@ pub fn contact_pattern(
 // ---------------------------------------------------------------------------------------------
 
 use crate::energy::TotalEnergy;
-use contactlab_solvers::uzawa::SparseLdl;
+use contactlab_solvers::linalg::SparseLdl;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus};
 use std::collections::{BTreeMap, HashMap};
 

@@ -15,7 +15,7 @@
 //! - `summary.json` (the settings and [`DynamicMetrics`]).
 
 use crate::harness::case::{self, CaseSettings, DynamicMetrics};
-use crate::harness::run::RunArgs;
+use crate::harness::run::{validate_cli, RunArgs};
 use crate::output::svg::write_svg;
 use crate::output::timeseries::{timeseries_svg, Line};
 use crate::output::vtk::{write_vtu, PvdSeries};
@@ -25,6 +25,7 @@ use crate::scene::registry;
 use crate::scene::registry::DYNAMIC_SCENES;
 use crate::solve::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
 use crate::solve::outer::OuterSettings;
+use crate::solve::settings::RunSettings;
 use anyhow::{bail, Context, Result};
 use std::io::Write;
 use std::path::PathBuf;
@@ -70,7 +71,7 @@ pub fn parse_scheme(s: &str) -> Result<Scheme> {
 }
 
 /// `contactlab run … --dynamic` on a built-in scene.
-pub fn run_dynamic(a: &RunArgs) -> Result<()> {
+pub fn run_dynamic(a: &RunArgs, rs: &RunSettings) -> Result<()> {
     if !a.perturb.is_empty() || a.heights.is_some() {
         bail!("--perturb and --heights set the balloons' static start; they are not available with --dynamic");
     }
@@ -103,6 +104,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
     let label = a.scene.clone();
     run_prepared(
         a,
+        rs,
         ds,
         params_json,
         DynamicSettings { dt, steps, scheme },
@@ -117,6 +119,7 @@ pub fn run_dynamic(a: &RunArgs) -> Result<()> {
 /// them, and Δt and the number of steps must come from one or the other.
 pub fn run_dynamic_file(
     a: &RunArgs,
+    rs: &RunSettings,
     file: crate::scene::file::SceneFile,
     params_json: serde_json::Value,
 ) -> Result<()> {
@@ -144,6 +147,7 @@ pub fn run_dynamic_file(
     let label = ds.scene.name.clone();
     run_prepared(
         a,
+        rs,
         ds,
         params_json,
         DynamicSettings { dt, steps, scheme },
@@ -155,8 +159,12 @@ pub fn run_dynamic_file(
 
 /// The stepping and the run directory, shared by the built-in scenes and the scene files.
 /// `weight_g`: `|g|` when the contact-force plot gets the free bodies' weight `m g`.
+// The flags (`a`: output, frames, progress) and the run settings (`rs`: a scene file's
+// `[solver]` already merged) are both needed; the run-directory observers will take `a`'s share.
+#[allow(clippy::too_many_arguments)]
 fn run_prepared(
     a: &RunArgs,
+    rs: &RunSettings,
     mut ds: DynamicScene,
     params_json: serde_json::Value,
     dyn_settings: DynamicSettings,
@@ -168,23 +176,17 @@ fn run_prepared(
     dyn_settings
         .validate()
         .map_err(|e| anyhow::anyhow!("--dt/--steps: {e}"))?;
+    validate_cli(rs)?;
     let cs = CaseSettings {
-        backend: a.backend.clone(),
-        accuracy: a.accuracy,
-        pruning: a.pruning,
-        tol_j: a.tol_j,
-        max_outer: a.max_outer,
-        max_inner: Some(a.max_inner),
+        backend: rs.backend.clone(),
+        accuracy: rs.accuracy,
+        pruning: rs.pruning,
+        tol_j: rs.tol_j,
+        max_outer: rs.max_outer,
+        max_inner: Some(rs.max_inner),
         time_limit_s: None,
     };
-    if a.max_inner == 0 {
-        bail!("--max-inner must be >= 1, got 0");
-    }
-    let mut qps = a.accuracy.qp_settings(&a.backend);
-    if let Some(t) = a.qp_tol {
-        qps.eps_abs = t;
-        qps.eps_rel = t;
-    }
+    let qps = rs.qp_settings();
     let out = a
         .out
         .clone()
@@ -252,7 +254,7 @@ fn run_prepared(
         if !a.quiet {
             eprint!(
                 "\r[{} {}] step {:>5}/{steps} t = {:.4}  E = {:.8e}  K = {:.3e}  min dist/eps = {:.5}  contacts {:>4}  F = {:.4e}  outer {:>4} {}   ",
-                scheme.as_str(), a.backend, rec.step, rec.time, rec.total, rec.kinetic, rec.min_distance / eps, rec.active_contacts, rec.contact_force, rec.outer_iterations, rec.status
+                scheme.as_str(), rs.backend, rec.step, rec.time, rec.total, rec.kinetic, rec.min_distance / eps, rec.active_contacts, rec.contact_force, rec.outer_iterations, rec.status
             );
             let _ = std::io::stderr().flush();
         }
@@ -279,7 +281,7 @@ fn run_prepared(
         scheme.as_str(),
         dt,
         res.steps,
-        a.backend
+        rs.backend
     );
     let energy = timeseries_svg(
         &[
@@ -337,9 +339,9 @@ fn run_prepared(
         steps,
         scheme: scheme.as_str(),
         density: ds.density.clone(),
-        backend: a.backend.clone(),
-        pruning: a.pruning.as_str(),
-        accuracy: a.accuracy.as_str(),
+        backend: rs.backend.clone(),
+        pruning: rs.pruning.as_str(),
+        accuracy: rs.accuracy.as_str(),
         qp_tol: qps.eps_abs,
         weight,
         metrics: metrics.clone(),

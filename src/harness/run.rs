@@ -15,10 +15,10 @@ use crate::output::write_atomic;
 use crate::scene::balloons::{self, classify_state, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
-use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus, TrustSettings};
-use crate::solve::settings::Accuracy;
-use anyhow::{bail, Context, Result};
-use contactlab_solvers::backend_from_name;
+use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus};
+use crate::solve::settings::{Accuracy, RunSettings};
+use anyhow::{anyhow, bail, Context, Result};
+use contactlab_solvers::{backend_from_name, QpError};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -30,8 +30,8 @@ pub struct RunArgs {
     /// "Scene files"), whose `[solver]` settings apply unless the corresponding flag is given.
     #[arg(default_value = "balloons")]
     pub scene: String,
-    /// Sub-problem backend: clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one structure), osqp or uzawa.
-    #[arg(long, default_value = "clarabel")]
+    /// Sub-problem backend (the backend registry, `contactlab_solvers::registry`).
+    #[arg(long, default_value = "clarabel", help = backend_help())]
     pub backend: String,
     /// Mesh level: elements per membrane (balloons), edges of the ring (both default 40), or
     /// the 3D scene's level (default: the scene's own, README "3D").
@@ -99,7 +99,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Time stepping (§6): each step minimizes ½∫m|v_(i+1) − v_i|² + J over A_(h,ε) with the
-    /// same outer loop (DYNAMICS_NOTES.md).
+    /// same outer loop (docs/method.md).
     #[arg(long)]
     pub dynamic: bool,
     /// Time step (--dynamic; default: the dynamic scene's, or the scene file's [dynamics]).
@@ -113,6 +113,14 @@ pub struct RunArgs {
     /// acceleration).
     #[arg(long)]
     pub scheme: Option<String>,
+}
+
+/// `--backend`'s help: the names of the backend registry.
+fn backend_help() -> String {
+    format!(
+        "Sub-problem backend: {}",
+        contactlab_solvers::registry::backend_list_help()
+    )
 }
 
 fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
@@ -173,9 +181,11 @@ struct Summary {
     accuracy: &'static str,
 }
 
-/// Loads a scene file and applies its `[solver]` settings to the flags not given explicitly.
+/// Loads a scene file and applies its `[solver]` settings to `settings` for the keys whose
+/// flag was not given explicitly (a flag on the command line wins over the file).
 fn scene_from_file(
-    a: &mut RunArgs,
+    a: &RunArgs,
+    settings: &mut RunSettings,
     explicit: &dyn Fn(&str) -> bool,
 ) -> Result<(crate::scene::file::SceneFile, serde_json::Value)> {
     for (flag, given) in [
@@ -196,7 +206,7 @@ fn scene_from_file(
     }
     let f = crate::scene::file::load(std::path::Path::new(&a.scene))?;
     let s = &f.solver;
-    // A flag given on the command line wins over the file's `[solver]` value.
+    // `$id`: the flag's clap id; `$field`: the key of `[solver]` and of RunSettings.
     macro_rules! from_file {
         ($id:literal, $field:ident) => {
             from_file!($id, $field, |v| Ok::<_, anyhow::Error>(v))
@@ -204,7 +214,7 @@ fn scene_from_file(
         ($id:literal, $field:ident, $convert:expr) => {
             if !explicit($id) {
                 if let Some(v) = s.$field.clone() {
-                    a.$field = $convert(v)?;
+                    settings.$field = $convert(v)?;
                 }
             }
         };
@@ -219,11 +229,7 @@ fn scene_from_file(
     from_file!("qp_tol", qp_tol, |v| Ok::<_, anyhow::Error>(Some(v)));
     from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
         .map_err(anyhow::Error::msg));
-    if !explicit("no_warm_start") {
-        if let Some(v) = s.warm_start {
-            a.no_warm_start = !v;
-        }
-    }
+    from_file!("no_warm_start", warm_start);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -233,17 +239,62 @@ fn scene_from_file(
     Ok((f, params))
 }
 
+impl RunArgs {
+    /// The run settings the flags give (before a scene file's `[solver]`).
+    pub fn settings(&self) -> RunSettings {
+        RunSettings {
+            backend: self.backend.clone(),
+            accuracy: self.accuracy,
+            pruning: self.pruning,
+            tol_j: self.tol_j,
+            qp_tol: self.qp_tol,
+            max_outer: self.max_outer,
+            max_inner: self.max_inner,
+            lazy_start: self.lazy_start,
+            trust_delta0: self.trust_delta0,
+            warm_start: !self.no_warm_start,
+            time_limit_s: self.time_limit,
+        }
+    }
+}
+
+/// Checks `settings` ([`RunSettings::validate`]) in the command line's words: the flag and the
+/// value (a bad backend name or QP tolerance in the backends' own words).
+pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
+    let Err(e) = settings.validate() else {
+        return Ok(());
+    };
+    let v = &e.value;
+    Err(match e.key {
+        "backend" => QpError::UnknownBackend(settings.backend.clone()).into(),
+        "qp_tol" => QpError::InvalidSetting {
+            name: "eps_abs",
+            value: v.clone(),
+            reason: "must be finite and > 0",
+        }
+        .into(),
+        "max_outer" => anyhow!("--max-outer must be >= 1, got {v}"),
+        "max_inner" => anyhow!("--max-inner must be >= 1, got {v}"),
+        "lazy_start" => anyhow!("--lazy-start must be finite and >= 0, got {v}"),
+        "trust_delta0" => anyhow!("--trust-delta0 must be finite and > 0, got {v}"),
+        "time_limit_s" => anyhow!("--time-limit must be > 0 seconds, got {v}"),
+        "tol_j" => anyhow!("--tol-j must be > 0, got {v}"),
+        _ => e.into(),
+    })
+}
+
 /// `contactlab run`: a static run (or, with `--dynamic`, a dynamic one) and its run
 /// directory. `explicit(id)` tells whether the flag `id` was given on the command line (it
 /// then wins over a scene file's `[solver]`).
-pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
+pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let from_file = a.scene.ends_with(".toml");
+    let mut rs = a.settings();
     if a.dynamic {
         if from_file {
-            let (f, params) = scene_from_file(&mut a, explicit)?;
-            return dynamic_run::run_dynamic_file(&a, f, params);
+            let (f, params) = scene_from_file(&a, &mut rs, explicit)?;
+            return dynamic_run::run_dynamic_file(&a, &rs, f, params);
         }
-        return dynamic_run::run_dynamic(&a);
+        return dynamic_run::run_dynamic(&a, &rs);
     }
     if a.dt.is_some() || a.steps.is_some() || a.scheme.is_some() {
         bail!("--dt, --steps and --scheme are options of a dynamic run: add --dynamic");
@@ -261,7 +312,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     };
     let (scene, params) = match a.scene.as_str() {
         _ if from_file => {
-            let (f, params) = scene_from_file(&mut a, explicit)?;
+            let (f, params) = scene_from_file(&a, &mut rs, explicit)?;
             (f.scene, params)
         }
         "balloons" => {
@@ -330,46 +381,10 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
             (scene, json)
         }
     };
-    let mut qps = a.accuracy.qp_settings(&a.backend);
-    if let Some(t) = a.qp_tol {
-        qps.eps_abs = t;
-        qps.eps_rel = t;
-    }
-    let mut backend = backend_from_name(&a.backend, &qps)?;
-    let mut settings = OuterSettings {
-        tol_j: a.tol_j.unwrap_or(a.accuracy.tol_j()),
-        max_outer: a.max_outer,
-        pruning: a.pruning,
-        lazy_start: a.lazy_start,
-        trust: TrustSettings {
-            delta0: a.trust_delta0,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    settings.inner.max_inner = a.max_inner;
-    settings.inner.warm_start = !a.no_warm_start;
-    settings.time_limit_s = a.time_limit;
-    if a.max_inner == 0 {
-        bail!("--max-inner must be >= 1, got 0");
-    }
-    if !(a.lazy_start >= 0.0 && a.lazy_start.is_finite()) {
-        bail!("--lazy-start must be finite and >= 0, got {}", a.lazy_start);
-    }
-    if !(a.trust_delta0 > 0.0 && a.trust_delta0.is_finite()) {
-        bail!(
-            "--trust-delta0 must be finite and > 0, got {}",
-            a.trust_delta0
-        );
-    }
-    if let Some(t) = a.time_limit {
-        if t.is_nan() || t <= 0.0 {
-            bail!("--time-limit must be > 0 seconds, got {t}");
-        }
-    }
-    if settings.tol_j.is_nan() || settings.tol_j <= 0.0 {
-        bail!("--tol-j must be > 0, got {}", settings.tol_j);
-    }
+    validate_cli(&rs)?;
+    let qps = rs.qp_settings();
+    let mut backend = backend_from_name(&rs.backend, &qps)?;
+    let settings = rs.outer_settings();
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
@@ -423,7 +438,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         if !quiet {
             eprint!(
                 "\r[{} {}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
-                a.backend, a.pruning.as_str(), rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
+                rs.backend, rs.pruning.as_str(), rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
             );
             let _ = std::io::stderr().flush();
         }
@@ -509,7 +524,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     ];
     let title = format!(
         "{} n={} backend={} state={} J={:.10e}",
-        scene.name, n, a.backend, state, res.energy
+        scene.name, n, rs.backend, state, res.energy
     );
     let svg = if mesh.dim == 3 {
         let faces = drawn_faces(mesh);
@@ -556,7 +571,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         n,
         h: scene.h,
         eps: scene.eps,
-        backend: a.backend.clone(),
+        backend: rs.backend.clone(),
         pruning: settings.pruning.as_str(),
         status: res.status.as_str(),
         outer_iterations: res.outer_iterations,
@@ -574,7 +589,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         params,
         settings,
         qp_tol: qps.eps_abs,
-        accuracy: a.accuracy.as_str(),
+        accuracy: rs.accuracy.as_str(),
     };
     write_atomic(
         &out.join("summary.json"),
@@ -582,7 +597,7 @@ pub fn run_cmd(mut a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     )?;
     println!(
         "{}: status {} after {} outer iterations, J = {:.12e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
-        a.backend,
+        rs.backend,
         res.status.as_str(),
         res.outer_iterations,
         res.energy,

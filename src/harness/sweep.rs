@@ -21,7 +21,7 @@ use crate::harness::rows::{
 use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
-use crate::solve::settings::Accuracy;
+use crate::solve::settings::{Accuracy, RunSettings};
 use anyhow::{bail, Context, Result};
 use contactlab_solvers::BACKEND_NAMES;
 use rayon::prelude::*;
@@ -408,36 +408,44 @@ impl BlockSettings {
             format!("{at}: pruning {pruning_name:?}: expected lazy, trust-region or all-pairs")
         })?;
         let tol_j = c.tol_j.or(defaults.tol_j);
-        if let Some(t) = tol_j {
-            if !(t > 0.0 && t.is_finite()) {
-                bail!("{at}: tol_j = {t} must be finite and > 0");
-            }
-        }
         let max_outer = c.max_outer.or(defaults.max_outer).unwrap_or(2000);
         let max_inner = c.max_inner.or(defaults.max_inner);
         let time_limit_s = c.time_limit_s.or(defaults.time_limit_s);
-        if let Some(t) = time_limit_s {
-            if t.is_nan() || t <= 0.0 {
-                bail!("{at}: time_limit_s = {t} must be > 0");
-            }
-            if b.dynamic {
-                bail!(
-                    "{at}: time_limit_s applies to static runs only (a dynamic run solves one problem per step)"
-                );
+        // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
+        // file does not set at their defaults).
+        for be in backends
+            .iter()
+            .map(String::as_str)
+            .chain(backends.is_empty().then_some("clarabel"))
+        {
+            let rs = RunSettings {
+                backend: be.to_string(),
+                tol_j,
+                max_outer,
+                max_inner: max_inner.unwrap_or(RunSettings::default().max_inner),
+                time_limit_s,
+                ..RunSettings::default()
+            };
+            if let Err(e) = rs.validate() {
+                match e.key {
+                    "max_outer" | "max_inner" => {
+                        bail!("{at}: max_outer and max_inner must be ≥ 1")
+                    }
+                    "backend" => bail!(
+                        "{at}: unknown backend {} (available: {})",
+                        e.value,
+                        BACKEND_NAMES.join(", ")
+                    ),
+                    _ => bail!("{at}: {} = {} {}", e.key, e.value, e.rule),
+                }
             }
         }
-        if max_outer == 0 || max_inner == Some(0) {
-            bail!("{at}: max_outer and max_inner must be ≥ 1");
+        if time_limit_s.is_some() && b.dynamic {
+            bail!(
+                "{at}: time_limit_s applies to static runs only (a dynamic run solves one problem per step)"
+            );
         }
         let reference = c.reference.clone().or_else(|| defaults.reference.clone());
-        for be in &backends {
-            if !BACKEND_NAMES.contains(&be.as_str()) {
-                bail!(
-                    "{at}: unknown backend {be:?} (available: {})",
-                    BACKEND_NAMES.join(", ")
-                );
-            }
-        }
         let mut accuracy = Vec::new();
         for a in &accs {
             accuracy.push(Accuracy::from_name(a).with_context(|| {

@@ -73,6 +73,7 @@ use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use crate::scene::meshio::{read_mesh_file, MeshData, MeshReadError};
 use crate::scene::Scene;
 use crate::solve::outer::Pruning;
+use crate::solve::settings::RunSettings;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -84,9 +85,6 @@ pub const MAX_COORDINATE: f64 = 1e100;
 /// Relative threshold under which an element counts as degenerate (area ≤ tol·ℓ²,
 /// 6·volume ≤ tol·ℓ³, ℓ its longest edge).
 pub const DEGENERATE_TOL: f64 = 1e-12;
-
-/// Backends `[solver] backend` accepts.
-pub const BACKENDS: [&str; 4] = ["clarabel", "clarabel-reuse", "osqp", "uzawa"];
 
 /// An invalid scene file. Every variant names the file and what is at fault.
 #[derive(Debug, Error)]
@@ -162,7 +160,7 @@ pub enum SceneFileError {
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
-    /// `clarabel`, `clarabel-reuse`, `osqp` or `uzawa`.
+    /// A backend name of [`contactlab_solvers::registry`].
     pub backend: Option<String>,
     /// `low`, `default` or `high`.
     pub accuracy: Option<String>,
@@ -182,6 +180,37 @@ pub struct SolverSpec {
     pub trust_delta0: Option<f64>,
     /// Warm-start the QP duals.
     pub warm_start: Option<bool>,
+}
+
+impl SolverSpec {
+    /// Writes the keys the file gives into `settings` (all but `accuracy`, a name checked and
+    /// parsed by the caller).
+    pub fn fill(&self, settings: &mut RunSettings) {
+        let s = settings;
+        if let Some(v) = &self.backend {
+            s.backend = v.clone();
+        }
+        if let Some(v) = self.pruning {
+            s.pruning = v;
+        }
+        if let Some(v) = self.max_outer {
+            s.max_outer = v;
+        }
+        if let Some(v) = self.max_inner {
+            s.max_inner = v;
+        }
+        if let Some(v) = self.lazy_start {
+            s.lazy_start = v;
+        }
+        if let Some(v) = self.trust_delta0 {
+            s.trust_delta0 = v;
+        }
+        if let Some(v) = self.warm_start {
+            s.warm_start = v;
+        }
+        s.tol_j = self.tol_j.or(s.tol_j);
+        s.qp_tol = self.qp_tol.or(s.qp_tol);
+    }
 }
 
 /// `[dynamics]`: defaults of `contactlab run FILE --dynamic` (each optional; `--dt`,
@@ -557,16 +586,18 @@ impl Ctx<'_> {
         )
     }
 
+    /// Checks `[solver]` with [`RunSettings::validate`] (the keys it leaves out at their
+    /// defaults) and its `accuracy` name.
     fn check_solver(&self, s: &SolverSpec, line: usize) -> Result<(), SceneFileError> {
-        if let Some(b) = &s.backend {
-            if !BACKENDS.contains(&b.as_str()) {
-                return Err(self.invalid(
-                    line,
-                    "solver.backend",
-                    format!("{b:?}"),
-                    format!("expected one of {}", BACKENDS.join(", ")),
-                ));
-            }
+        let mut rs = RunSettings::default();
+        s.fill(&mut rs);
+        if let Err(e) = rs.validate() {
+            return Err(self.invalid(
+                line,
+                format!("solver.{}", e.key),
+                e.value,
+                e.rule.to_string(),
+            ));
         }
         if let Some(a) = &s.accuracy {
             if crate::solve::settings::Accuracy::from_name(a).is_none() {
@@ -576,32 +607,6 @@ impl Ctx<'_> {
                     format!("{a:?}"),
                     "expected one of low, default, high",
                 ));
-            }
-        }
-        for (k, v) in [("max_outer", s.max_outer), ("max_inner", s.max_inner)] {
-            if v == Some(0) {
-                return Err(self.invalid(line, format!("solver.{k}"), 0, "must be ≥ 1"));
-            }
-        }
-        for (k, v) in [
-            ("tol_j", s.tol_j),
-            ("qp_tol", s.qp_tol),
-            ("trust_delta0", s.trust_delta0),
-        ] {
-            if let Some(v) = v {
-                if !(v > 0.0 && v.is_finite()) {
-                    return Err(self.invalid(
-                        line,
-                        format!("solver.{k}"),
-                        v,
-                        "must be finite and > 0",
-                    ));
-                }
-            }
-        }
-        if let Some(v) = s.lazy_start {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(self.invalid(line, "solver.lazy_start", v, "must be finite and ≥ 0"));
             }
         }
         Ok(())

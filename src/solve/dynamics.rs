@@ -1,4 +1,4 @@
-//! The dynamic case (Pantz 2008, §6; SPEC §5): every time step is a problem (3), solved by
+//! The dynamic case (Pantz 2008, §6; docs/method.md): every time step is a problem (3), solved by
 //! the same outer loop ([`crate::solve::outer::run`]) with the same backends and pruning.
 //!
 //! # The step problem

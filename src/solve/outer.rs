@@ -1,5 +1,5 @@
 //! The outer loop of §3: `φ_{k+1} = argmin { J(φ) : φ ∈ T(φ_k) }`, stopped when
-//! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (SPEC §2).
+//! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (docs/method.md).
 //!
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an observer
 //! callback, which writes CSV, frames or a progress line.
@@ -20,7 +20,7 @@ use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 use thiserror::Error;
 
-/// Which pairs of T(ψ) the sub-problem carries (SPEC §2, "Only what the scene requires").
+/// Which pairs of T(ψ) the sub-problem carries (docs/method.md, pruning).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Pruning {
@@ -243,7 +243,7 @@ pub struct RunResult {
 
 /// Round-off allowance of the exact admissibility check: `16 u · max(1, max |x_i|)`, `u` the
 /// machine epsilon. Lemma 4.2 gives `dist ≥ ε` in exact arithmetic; the distance kernel computes
-/// from coordinates of magnitude `max |x_i|`, so it is exact to a few `u` times that (SPEC §3:
+/// from coordinates of magnitude `max |x_i|`, so it is exact to a few `u` times that (docs/method.md:
 /// "≥ ε, to round-off"). Measured case: Uzawa at tolerance 1e-8 (above the row margin δ) put a
 /// row exactly at ε and the kernel returned ε − 2.3e-17.
 pub fn roundoff_allowance(x: &[f64]) -> f64 {

@@ -1,23 +1,31 @@
-//! Accuracy presets `low`, `default`, `high`: per backend, the QP tolerance (`eps_abs =
-//! eps_rel`), and the outer stopping tolerance `tol_J` (SPEC §3: the sub-problem accuracy must
-//! match the outer stopping rule — a QP tolerance near 1e-8 leaves constraint violations as
-//! large as a 1e-10 energy change, so `high` goes to 1e-11).
+//! Accuracy presets `low`, `default`, `high`: the outer stopping tolerance `tol_J` and, per
+//! backend, the QP tolerance (`eps_abs = eps_rel`). The sub-problem accuracy must match the
+//! outer stopping rule (docs/method.md): a QP tolerance near 1e-8 leaves constraint violations
+//! as large as a 1e-10 energy change, so `high` goes to 1e-11 with Clarabel.
 //!
-//! | preset  | tol_J  | clarabel | osqp | uzawa |
-//! |---------|--------|----------|------|-------|
-//! | low     | 1e-6   | 1e-6     | 1e-4 | 1e-6  |
-//! | default | 1e-10  | 1e-9     | 1e-6 | 1e-8  |
-//! | high    | 1e-12  | 1e-11    | 1e-8 | 1e-10 |
+//! | preset  | tol_J  |
+//! |---------|--------|
+//! | low     | 1e-6   |
+//! | default | 1e-10  |
+//! | high    | 1e-12  |
 //!
-//! `default` is the measured default of each backend (`contactlab_solvers::default_settings`,
-//! README "Choosing a backend"). OSQP's ADMM stays three orders looser than Clarabel in each
-//! preset: at 1e-9 it hit its iteration limit near the fixed point (README); its solution
-//! polishing recovers the active-set solution.
+//! [`RunSettings`] holds everything a run is configured by; the command line (`contactlab
+//! run`), a scene file's `[solver]` and a sweep file's blocks all fill it, and its one
+//! [`RunSettings::validate`] checks it (docs/cli.md, docs/scene-files.md, docs/sweeps.md).
+//!
+//! The QP tolerance of a preset is the backend's own (the table in
+//! [`contactlab_solvers::registry`]); `default` is each backend's measured default
+//! ([`contactlab_solvers::default_settings`]).
 
-use contactlab_solvers::{default_settings, QpSettings};
+use crate::solve::outer::{OuterSettings, Pruning, TrustSettings};
+use contactlab_solvers::{default_settings, preset_tolerances, QpSettings, BACKEND_NAMES};
+use thiserror::Error;
 
 /// An accuracy preset.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum Accuracy {
     /// Fast, loose.
     Low,
@@ -54,17 +62,14 @@ impl Accuracy {
         }
     }
 
-    /// The QP tolerance of `backend` (a backend name; `clarabel-reuse` as `clarabel`).
+    /// The QP tolerance of `backend` in this preset (from the backend registry,
+    /// [`contactlab_solvers::registry`]).
     pub fn qp_tol(&self, backend: &str) -> f64 {
-        let osqp = backend == "osqp";
-        let uzawa = backend == "uzawa";
+        let tol = preset_tolerances(backend);
         match self {
-            Accuracy::Low if osqp => 1e-4,
-            Accuracy::Low => 1e-6,
-            Accuracy::Default => default_settings(backend).eps_abs,
-            Accuracy::High if osqp => 1e-8,
-            Accuracy::High if uzawa => 1e-10,
-            Accuracy::High => 1e-11,
+            Accuracy::Low => tol.low,
+            Accuracy::Default => tol.default,
+            Accuracy::High => tol.high,
         }
     }
 
@@ -79,13 +84,179 @@ impl Accuracy {
     }
 }
 
+/// Everything a run (static, or each step of a dynamic one) is configured by, with the
+/// defaults of `contactlab run`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunSettings {
+    /// Sub-problem backend, a name of [`contactlab_solvers::registry`].
+    pub backend: String,
+    /// Accuracy preset (QP tolerance and `tol_J`).
+    pub accuracy: Accuracy,
+    /// Which pairs of T(ψ) the sub-problems carry.
+    pub pruning: Pruning,
+    /// Override of the preset's `tol_J` (> 0, finite).
+    pub tol_j: Option<f64>,
+    /// Override of the preset's QP tolerance, `eps_abs = eps_rel` (> 0, finite).
+    pub qp_tol: Option<f64>,
+    /// Maximum outer iterations (≥ 1).
+    pub max_outer: usize,
+    /// Inner (Newton-type) steps per T(ψ) at most (≥ 1); 1 gives inexact sub-problems.
+    pub max_inner: usize,
+    /// Lazy rows' initial radius cap relative to the median edge (finite, ≥ 0).
+    pub lazy_start: f64,
+    /// Initial trust-region half-width δ0 relative to the median edge (finite, > 0).
+    pub trust_delta0: f64,
+    /// Warm-start the QP duals.
+    pub warm_start: bool,
+    /// Wall-time limit of a static run in seconds (> 0; `None`: none).
+    pub time_limit_s: Option<f64>,
+}
+
+impl Default for RunSettings {
+    fn default() -> Self {
+        let outer = OuterSettings::default();
+        RunSettings {
+            backend: "clarabel".into(),
+            accuracy: Accuracy::Default,
+            pruning: outer.pruning,
+            tol_j: None,
+            qp_tol: None,
+            max_outer: outer.max_outer,
+            max_inner: outer.inner.max_inner,
+            lazy_start: outer.lazy_start,
+            trust_delta0: outer.trust.delta0,
+            warm_start: outer.inner.warm_start,
+            time_limit_s: outer.time_limit_s,
+        }
+    }
+}
+
+/// Why a [`RunSettings`] value is refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rule {
+    /// Not a name of the backend registry.
+    KnownBackend,
+    /// Must be ≥ 1.
+    AtLeastOne,
+    /// Must be finite and > 0.
+    FinitePositive,
+    /// Must be finite and ≥ 0.
+    FiniteNonNegative,
+    /// Must be > 0 (not NaN).
+    Positive,
+}
+
+impl std::fmt::Display for Rule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Rule::KnownBackend => write!(f, "expected one of {}", BACKEND_NAMES.join(", ")),
+            Rule::AtLeastOne => write!(f, "must be ≥ 1"),
+            Rule::FinitePositive => write!(f, "must be finite and > 0"),
+            Rule::FiniteNonNegative => write!(f, "must be finite and ≥ 0"),
+            Rule::Positive => write!(f, "must be > 0"),
+        }
+    }
+}
+
+/// An invalid [`RunSettings`] value: the key (as in a scene file's `[solver]`), its value and
+/// the rule it breaks. Each front end words it in its own terms (a flag, `solver.KEY`, a sweep
+/// block).
+#[derive(Clone, Debug, Error, PartialEq)]
+#[error("{key} = {value}: {rule}")]
+pub struct SettingsError {
+    /// The key: `backend`, `qp_tol`, `max_outer`, `max_inner`, `lazy_start`, `trust_delta0`,
+    /// `time_limit_s` or `tol_j`.
+    pub key: &'static str,
+    /// The value, printed (a backend name quoted).
+    pub value: String,
+    /// The rule it breaks.
+    pub rule: Rule,
+}
+
+impl RunSettings {
+    /// Checks every key, naming the first bad one (in the order of the fields' checks:
+    /// backend, qp_tol, max_outer, max_inner, lazy_start, trust_delta0, time_limit_s, tol_j).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let err = |key, value: String, rule| Err(SettingsError { key, value, rule });
+        let finite_pos = |v: f64| v > 0.0 && v.is_finite();
+        if !BACKEND_NAMES.contains(&self.backend.as_str()) {
+            return err("backend", format!("{:?}", self.backend), Rule::KnownBackend);
+        }
+        if let Some(t) = self.qp_tol.filter(|&t| !finite_pos(t)) {
+            return err("qp_tol", t.to_string(), Rule::FinitePositive);
+        }
+        if self.max_outer == 0 {
+            return err("max_outer", "0".into(), Rule::AtLeastOne);
+        }
+        if self.max_inner == 0 {
+            return err("max_inner", "0".into(), Rule::AtLeastOne);
+        }
+        if !(self.lazy_start >= 0.0 && self.lazy_start.is_finite()) {
+            return err(
+                "lazy_start",
+                self.lazy_start.to_string(),
+                Rule::FiniteNonNegative,
+            );
+        }
+        if !finite_pos(self.trust_delta0) {
+            return err(
+                "trust_delta0",
+                self.trust_delta0.to_string(),
+                Rule::FinitePositive,
+            );
+        }
+        if let Some(t) = self.time_limit_s.filter(|t| t.is_nan() || *t <= 0.0) {
+            return err("time_limit_s", t.to_string(), Rule::Positive);
+        }
+        if let Some(t) = self.tol_j.filter(|&t| !finite_pos(t)) {
+            return err("tol_j", t.to_string(), Rule::FinitePositive);
+        }
+        Ok(())
+    }
+
+    /// `tol_J`: the override, or the preset's.
+    pub fn tol_j(&self) -> f64 {
+        self.tol_j.unwrap_or(self.accuracy.tol_j())
+    }
+
+    /// The backend settings: the preset's, with `qp_tol` overriding `eps_abs = eps_rel`.
+    pub fn qp_settings(&self) -> QpSettings {
+        let mut qps = self.accuracy.qp_settings(&self.backend);
+        if let Some(t) = self.qp_tol {
+            qps.eps_abs = t;
+            qps.eps_rel = t;
+        }
+        qps
+    }
+
+    /// The outer loop's settings.
+    pub fn outer_settings(&self) -> OuterSettings {
+        let mut settings = OuterSettings {
+            tol_j: self.tol_j(),
+            max_outer: self.max_outer,
+            pruning: self.pruning,
+            lazy_start: self.lazy_start,
+            trust: TrustSettings {
+                delta0: self.trust_delta0,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        settings.inner.max_inner = self.max_inner;
+        settings.inner.warm_start = self.warm_start;
+        settings.time_limit_s = self.time_limit_s;
+        settings
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn presets_are_ordered_and_default_matches_the_backends() {
-        for b in ["clarabel", "clarabel-reuse", "osqp", "uzawa"] {
+        for b in BACKEND_NAMES {
             assert_eq!(Accuracy::Default.qp_settings(b), default_settings(b), "{b}");
             assert!(Accuracy::Low.qp_tol(b) > Accuracy::Default.qp_tol(b), "{b}");
             assert!(
@@ -99,5 +270,48 @@ mod tests {
             assert_eq!(Accuracy::from_name(a.as_str()), Some(a));
         }
         assert_eq!(Accuracy::from_name("medium"), None);
+    }
+
+    #[test]
+    fn run_settings_defaults_are_valid_and_errors_name_the_key() {
+        let d = RunSettings::default();
+        assert_eq!(d.validate(), Ok(()));
+        assert_eq!(d.outer_settings(), OuterSettings::default());
+        let bad = |f: &dyn Fn(&mut RunSettings)| {
+            let mut s = RunSettings::default();
+            f(&mut s);
+            s.validate().unwrap_err().to_string()
+        };
+        assert_eq!(
+            bad(&|s| s.backend = "gurobi".into()),
+            format!(
+                "backend = \"gurobi\": expected one of {}",
+                BACKEND_NAMES.join(", ")
+            )
+        );
+        assert_eq!(bad(&|s| s.max_inner = 0), "max_inner = 0: must be ≥ 1");
+        assert_eq!(bad(&|s| s.max_outer = 0), "max_outer = 0: must be ≥ 1");
+        assert_eq!(
+            bad(&|s| s.tol_j = Some(0.0)),
+            "tol_j = 0: must be finite and > 0"
+        );
+        assert_eq!(
+            bad(&|s| s.qp_tol = Some(f64::INFINITY)),
+            "qp_tol = inf: must be finite and > 0"
+        );
+        assert_eq!(
+            bad(&|s| s.lazy_start = -1.0),
+            "lazy_start = -1: must be finite and ≥ 0"
+        );
+        assert_eq!(
+            bad(&|s| s.trust_delta0 = 0.0),
+            "trust_delta0 = 0: must be finite and > 0"
+        );
+        assert_eq!(
+            bad(&|s| s.time_limit_s = Some(0.0)),
+            "time_limit_s = 0: must be > 0"
+        );
+        let s: RunSettings = toml::from_str("backend = \"uzawa\"\naccuracy = \"high\"").unwrap();
+        assert_eq!((s.backend.as_str(), s.accuracy), ("uzawa", Accuracy::High));
     }
 }

@@ -1,4 +1,4 @@
-//! One outer step: minimize J over the fixed polyhedron T(ψ) (SPEC §2, "Sub-problems").
+//! One outer step: minimize J over the fixed polyhedron T(ψ) (docs/method.md, sub-problems).
 //!
 //! At an inner iterate `y ∈ T(ψ)` the quadratic model `q(d) = g·d + ½dᵀ(H + ρI)d` is built
 //! from the projected (PSD) Hessian `H`; rank-one Hessian terms `c w wᵀ` (the gas term's
@@ -12,7 +12,7 @@
 //! over the free degrees of freedom goes to the backend; then a backtracking (Armijo) line
 //! search on J along `d`. Any point of `[y, y + d]` is in T(ψ) by convexity.
 //!
-//! With a trust region (SPEC §2, "Only what the scene requires") the QP also carries the box
+//! With a trust region (docs/method.md, pruning) the QP also carries the box
 //! `|y(v) + d(v) − ψ(v)|∞ ≤ δ` on every free dof, as rows after the rank-one rows.
 //!
 //! Two safeguards, both kept out of the reported energy:

@@ -1,0 +1,194 @@
+//! The backend registry: the one list of backends, by name, with their constructors, their
+//! default settings and the QP tolerance of each accuracy preset.
+//!
+//! Everything that names a backend — the command line (`--backend`), a scene file's
+//! `[solver] backend`, a sweep file's `backends`, the accuracy presets of the core — asks this
+//! list; nothing else holds backend names.
+//!
+//! # Defaults and presets
+//!
+//! Each backend's default tolerance (`eps_abs = eps_rel`, the `default` preset) was measured on
+//! the balloons scene (docs/measurements.md, "Choosing a backend"): Clarabel at `1e-9`; Uzawa at
+//! `1e-8` (at `1e-9` its accelerated dual ascent hit 10⁵ steps near the fixed point at n = 8,
+//! with violation 6e-9); OSQP (ADMM, with solution polishing) at `1e-6` (at `1e-9` it needed
+//! 10⁴–10⁵ iterations per QP and hit its iteration limit near the fixed point, while at `1e-6`
+//! polishing recovers the active-set solution). The `low` and `high` presets keep OSQP three
+//! orders looser than Clarabel.
+//!
+//! | backend          | low  | default | high  |
+//! |------------------|------|---------|-------|
+//! | `clarabel`       | 1e-6 | 1e-9    | 1e-11 |
+//! | `clarabel-reuse` | 1e-6 | 1e-9    | 1e-11 |
+//! | `osqp`           | 1e-4 | 1e-6    | 1e-8  |
+//! | `uzawa`          | 1e-6 | 1e-8    | 1e-10 |
+//!
+//! # Adding a backend
+//!
+//! Three files: the backend's own module (a type implementing [`QpBackend`]), one `mod` line in
+//! `lib.rs`, and one entry of [`BACKENDS`] here:
+//!
+//! ```ignore
+//! // solvers/src/lib.rs
+//! pub mod my_backend;
+//! // solvers/src/registry.rs, in BACKENDS
+//! Backend {
+//!     name: "mine",
+//!     about: "",
+//!     tol: PresetTolerances { low: 1e-6, default: 1e-8, high: 1e-10 },
+//!     build: |s| Box::new(crate::my_backend::MyBackend::new(s)),
+//! },
+//! ```
+//!
+//! It is then accepted by `contactlab run --backend mine`, by scene and sweep files, and
+//! compared with the others by `solvers/tests/agreement.rs` (which loops over
+//! [`BACKEND_NAMES`]).
+
+use crate::backend::{QpBackend, QpError, QpSettings};
+
+/// The QP tolerance (`eps_abs = eps_rel`) of a backend in each accuracy preset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PresetTolerances {
+    /// Preset `low`: fast, loose.
+    pub low: f64,
+    /// Preset `default`: the backend's measured default ([`default_settings`]).
+    pub default: f64,
+    /// Preset `high`: reference runs.
+    pub high: f64,
+}
+
+/// One registered backend.
+pub struct Backend {
+    /// Name on the command line, in scene and sweep files and in outputs.
+    pub name: &'static str,
+    /// A short description for help texts (empty when the name says it all).
+    pub about: &'static str,
+    /// Preset tolerances.
+    pub tol: PresetTolerances,
+    /// Builds the backend from validated settings.
+    pub build: fn(QpSettings) -> Box<dyn QpBackend>,
+}
+
+/// Every backend, in the order of help texts and sweeps.
+pub const BACKENDS: [Backend; 4] = [
+    Backend {
+        name: "clarabel",
+        about: "",
+        tol: PresetTolerances {
+            low: 1e-6,
+            default: 1e-9,
+            high: 1e-11,
+        },
+        build: |s| Box::new(crate::clarabel_backend::ClarabelBackend::new(s)),
+    },
+    Backend {
+        name: "clarabel-reuse",
+        about: "Clarabel keeping its solver between QPs of one structure",
+        tol: PresetTolerances {
+            low: 1e-6,
+            default: 1e-9,
+            high: 1e-11,
+        },
+        build: |s| Box::new(crate::clarabel_backend::ClarabelBackend::with_reuse(s)),
+    },
+    Backend {
+        name: "osqp",
+        about: "",
+        tol: PresetTolerances {
+            low: 1e-4,
+            default: 1e-6,
+            high: 1e-8,
+        },
+        build: |s| Box::new(crate::osqp_backend::OsqpBackend::new(s)),
+    },
+    Backend {
+        name: "uzawa",
+        about: "",
+        tol: PresetTolerances {
+            low: 1e-6,
+            default: 1e-8,
+            high: 1e-10,
+        },
+        build: |s| Box::new(crate::uzawa::UzawaBackend::new(s)),
+    },
+];
+
+/// The names of [`BACKENDS`], in order.
+pub const BACKEND_NAMES: [&str; BACKENDS.len()] = {
+    let mut names = [""; BACKENDS.len()];
+    let mut i = 0;
+    while i < BACKENDS.len() {
+        names[i] = BACKENDS[i].name;
+        i += 1;
+    }
+    names
+};
+
+/// The registered backend called `name`.
+pub fn backend(name: &str) -> Option<&'static Backend> {
+    BACKENDS.iter().find(|b| b.name == name)
+}
+
+/// Builds a backend from its name and the common settings (validated first).
+pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn QpBackend>, QpError> {
+    settings.validate()?;
+    match backend(name) {
+        Some(b) => Ok((b.build)(settings.clone())),
+        None => Err(QpError::UnknownBackend(name.to_string())),
+    }
+}
+
+/// The preset tolerances of `name`; an unknown name gets Clarabel's (the first entry), so that
+/// a summary can be written before the name is refused by [`backend_from_name`].
+pub fn preset_tolerances(name: &str) -> PresetTolerances {
+    backend(name).unwrap_or(&BACKENDS[0]).tol
+}
+
+/// Default settings of a backend: [`QpSettings::default`] with its `default` preset tolerance.
+pub fn default_settings(name: &str) -> QpSettings {
+    let tol = preset_tolerances(name).default;
+    QpSettings {
+        eps_abs: tol,
+        eps_rel: tol,
+        ..QpSettings::default()
+    }
+}
+
+/// `a, b (about b), c or d`: the backend names for a help text.
+pub fn backend_list_help() -> String {
+    let items: Vec<String> = BACKENDS
+        .iter()
+        .map(|b| match b.about {
+            "" => b.name.to_string(),
+            about => format!("{} ({about})", b.name),
+        })
+        .collect();
+    match items.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_presets_ordered() {
+        for (i, b) in BACKENDS.iter().enumerate() {
+            assert_eq!(BACKEND_NAMES[i], b.name);
+            assert_eq!(backend(b.name).map(|x| x.name), Some(b.name));
+            assert!(
+                b.tol.low > b.tol.default && b.tol.default > b.tol.high,
+                "{}",
+                b.name
+            );
+        }
+        assert!(backend("gurobi").is_none());
+        assert_eq!(
+            backend_list_help(),
+            "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \
+             structure), osqp or uzawa"
+        );
+    }
+}
