@@ -28,11 +28,11 @@ enum Command {
     /// The scaling experiment: time per outer iteration, pairs, rows and peak memory against
     /// the number of vertices, per pruning mode (CSV + log-log SVG).
     Scaling(scaling::ScalingArgs),
-    /// Run a sweep file: one CSV row per run, flushed as each ends (README, "Sweeps").
+    /// Run a sweep file: one CSV row per run, flushed as each ends (docs/sweeps.md).
     Sweep(sweep::SweepArgs),
-    /// Run a scene and write every sub-problem QP as a QPS file (README, "QP export").
+    /// Run a scene and write every sub-problem QP as a QPS file (docs/sweeps.md, "QP export").
     ExportQp(export::ExportArgs),
-    /// Log-log SVG of sweep CSV columns with fitted slopes (README, "Plots").
+    /// Log-log SVG of sweep CSV columns with fitted slopes (docs/sweeps.md, "Plots").
     Plot(plot::PlotArgs),
     /// One case of the scaling experiment (run by `scaling` in a child process).
     #[command(hide = true)]

@@ -70,7 +70,7 @@ fn three_backends_agree_and_stay_admissible() {
 
 #[test]
 fn asymmetric_start_is_monotone_and_admissible() {
-    // OSQP at its default tolerance stops at its iteration limit on this start (README).
+    // OSQP at its default tolerance stops at its iteration limit on this start (docs/known-gaps.md).
     let params = BalloonsParams {
         n: 8,
         heights: [0.9, 0.2, 0.9, 0.2],

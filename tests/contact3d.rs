@@ -1,4 +1,4 @@
-//! The 3D engine on the 3D scenes (issue 5): every iterate passes the exact ALL-PAIRS 3D
+//! The 3D engine on the 3D scenes: every iterate passes the exact ALL-PAIRS 3D
 //! admissibility check (the O(N²) [`min_distance_brute_force`], not the broad phase the loop uses) and J
 //! never increases, with lazy rows and with the trust region; the backends' final energies;
 //! and a `contactlab run` directory of a 3D scene.
@@ -136,7 +136,7 @@ fn every_balloons3d_iterate_is_admissible_and_j_never_increases() {
 fn trust_region_3d_iterates_pass_the_all_pairs_check() {
     // δ0 = h̄/10: the default δ0 = h̄ reaches 2√3·h̄ in 3D, nearly every pair of these small
     // meshes (the solids' first step: 61 209 pairs, 21 s of Clarabel). Where the runs stop is
-    // measured in README "3D", not asserted here: the trust region ends the solids at a J
+    // measured in docs/measurements.md, not asserted here: the trust region ends the solids at a J
     // 2.5e-3 above the lazy rows' (both "converged").
     for scene in scenes() {
         let t = checked_run_with(
@@ -160,7 +160,7 @@ fn trust_region_3d_iterates_pass_the_all_pairs_check() {
 
 #[test]
 fn backends_agree_on_the_3d_final_energies() {
-    // Measured (README "3D", results/backends.csv): the rod and the solids agree to relative
+    // Measured (docs/measurements.md, results/backends.csv): the rod and the solids agree to relative
     // 1e-6 at the default preset; the sheets and balloons3d do not (see there).
     for scene in [
         rod::build(&RodParams::default()).unwrap(),

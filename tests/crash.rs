@@ -1,5 +1,5 @@
 //! A `contactlab run` killed with SIGKILL in the middle leaves no truncated file under its own
-//! name (issue 7, point 5): `history.csv` holds complete rows only (each row is one flushed
+//! name: `history.csv` holds complete rows only (each row is one flushed
 //! write), the VTK frames and `frames.pvd` are complete XML (written to a temporary file, then
 //! renamed), and `summary.json`, written last, is absent.
 

@@ -1,5 +1,5 @@
-//! Lemma 5.4 / 5.6 diagnostics on converged balloons runs (SPEC §3): the duals satisfy
-//! stationarity (the sign convention of SPEC §3, not the paper's printed one), are
+//! Lemma 5.4 / 5.6 diagnostics on converged balloons runs (docs/method.md): the duals satisfy
+//! stationarity (the sign convention of docs/method.md, not the paper's printed one), are
 //! non-negative and complementary, and the Lemma 5.6 bound holds at the fixed point.
 
 use contactlab::harness::diagnostics::{
@@ -53,7 +53,7 @@ fn lemma54_stationarity_sign_and_lemma56_bound() {
         let d = diagnose(n, "clarabel");
         assert_eq!(d.dual_qp_status, "solved", "n={n}");
         assert!(d.active_pairs > 0, "n={n}: no contact at the fixed point");
-        // Stationarity J'(φ) = Σ μ ∇row with μ ≥ 0 (SPEC §3 sign): relative to |J'|, at the
+        // Stationarity J'(φ) = Σ μ ∇row with μ ≥ 0 (docs/method.md sign): relative to |J'|, at the
         // level of the QP tolerance (1e-9) and of the outer stopping rule.
         let rel_raw = d.stationarity_raw / d.gradient_norm;
         let rel_can = d.stationarity_canonical / d.gradient_norm;
@@ -111,7 +111,7 @@ fn the_papers_printed_sign_is_not_stationary() {
     let zero = stationarity_residual(m, e, x, &res.last_rows, &vec![[0.0; 4]; minus_mu.len()]);
     assert!(
         plus < 1e-6 * zero,
-        "SPEC sign: {plus:.3e} vs |J'| = {zero:.3e}"
+        "sign of docs/method.md: {plus:.3e} vs |J'| = {zero:.3e}"
     );
     assert!(
         minus > 1.5 * zero,

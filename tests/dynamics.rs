@@ -186,7 +186,7 @@ fn dynamics_drop_short_run_admissible_with_impact() {
 
 /// `drop` long enough to come to rest (300 steps of 0.02 s, the scene's defaults): the kinetic
 /// energy ends below 1e-6 of the potential energy released, and the rest-window contact force
-/// is printed against the ring's weight (the figure of DYNAMICS_NOTES.md).
+/// is printed against the ring's weight (the figure of docs/measurements.md).
 #[test]
 fn dynamics_drop_comes_to_rest() {
     let mut ds = drop(&DropParams::default()).unwrap();
@@ -269,7 +269,7 @@ fn dynamics_collide_euler_energy_and_momentum() {
 /// Euler, energy conserved step by step in the free flight before the impact (to the
 /// tolerance of [`energy_tolerance`]), and the energy drift through the impact
 /// measured and printed (not asserted: position-level contact constraints are known to break
-/// the scheme's energy conservation; the figure is reported in DYNAMICS_NOTES.md).
+/// the scheme's energy conservation; the figure is reported in docs/measurements.md).
 #[test]
 fn dynamics_collide_newmark_drift() {
     let mut ds = collide(&CollideParams::default()).unwrap();

@@ -1,4 +1,4 @@
-//! Failures are recorded, not fatal (issue 7, point 4): a backend that stops at its iteration
+//! Failures are recorded, not fatal: a backend that stops at its iteration
 //! limit, an infeasible sub-problem and a run that hits its time limit each end the outer loop
 //! with a status, and the result is the last accepted iterate, which is admissible and has the
 //! lowest J of the run. A scripted backend wraps Clarabel and injects the failure at a chosen

@@ -1,4 +1,4 @@
-//! The pruning modes of issue 3 against the paper-faithful all-pairs reference (SPEC §2, "Only
+//! The pruning modes against the paper-faithful all-pairs reference (docs/method.md, "Only
 //! what the scene requires"): lazy rows give the same outer iterates, the trust region the same
 //! final energy, every pruned iterate passes the exact ALL-PAIRS admissibility check (the O(N²)
 //! reference, not the broad phase), and results do not depend on the number of threads.
@@ -106,7 +106,7 @@ fn lazy_rows_give_the_all_pairs_iterates() {
 }
 
 /// From the asymmetric start the path passes near an unstable configuration: the all-pairs
-/// reference itself reaches different fixed points at QP tolerances 1e-9 and 1e-10 (README,
+/// reference itself reaches different fixed points at QP tolerances 1e-9 and 1e-10 (docs/measurements.md,
 /// "Sensitivity of the asymmetric start"). Lazy rows are compared with it over the steps where
 /// the reference agrees with itself (J to 1e-8, positions to 1e-5), and that stretch must not
 /// be trivial.

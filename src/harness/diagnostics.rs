@@ -65,7 +65,7 @@ pub fn contact_pattern(
 }
 
 // ---------------------------------------------------------------------------------------------
-// Lemma 5.4 multipliers and the Lemma 5.6 residual of a converged run (SPEC §3).
+// Lemma 5.4 multipliers and the Lemma 5.6 residual of a converged run (docs/method.md, "Diagnostics of a converged run").
 // ---------------------------------------------------------------------------------------------
 
 use crate::energy::TotalEnergy;
@@ -113,7 +113,7 @@ pub struct PairMultiplier {
     pub weight: [f64; 4],
     /// Whether each row is active.
     pub active: [bool; 4],
-    /// Canonical duals of the rows, QP scaling (`h^{d−1}·λ` per row, SPEC §3).
+    /// Canonical duals of the rows, QP scaling (`h^{d−1}·λ` per row; eq. 9 and 14).
     pub mu: [f64; 4],
     /// `λ = Σ μ / h^{d−1}`: per length in 2D (eq. 14), per area in 3D.
     pub lambda: f64,
@@ -324,7 +324,7 @@ fn stationarity_vector(g: &[f64], rows: &[PairRows], mu: &[[f64; 4]], col: &[usi
 }
 
 /// `‖J'(x) − Σ_r μ_r ∇row_r‖_∞` over the free dofs: the Lemma 5.4 stationarity residual of
-/// duals `mu` (one per row of each pair) with the sign of SPEC §3.
+/// duals `mu` (one per row of each pair) with the sign of docs/method.md (the opposite of the paper's printed (9) and (15)).
 pub fn stationarity_residual(
     mesh: &Mesh,
     energy: &TotalEnergy,
@@ -348,11 +348,11 @@ fn max_abs(v: &[f64]) -> f64 {
 }
 
 /// Lemma 5.4 / 5.6 diagnostics at a converged configuration `x` (= φ_h) of a run whose last
-/// sub-problem had rows `last_rows` and duals `last_mult` (SPEC §3).
+/// sub-problem had rows `last_rows` and duals `last_mult` (docs/method.md, "Diagnostics of a converged run").
 ///
 /// * **Rows** of T(φ_h): every contact pair closer than `ε + active_tol + 1e-9·ε`, built at
 ///   ψ = φ_h; a row is active when its value is at most `ε + active_tol`.
-/// * **Canonical duals** (SPEC §3, "Uniqueness"): with `A` the active rows' gradients and
+/// * **Canonical duals** (docs/method.md, canonical duals): with `A` the active rows' gradients and
 ///   `g = J'(φ_h)` on the free dofs, the duals minimize `½|Aᵀμ − g|² + ½τ|μ|²` over `μ ≥ 0`,
 ///   `τ = tikhonov_rel · max diag(AAᵀ)`: a non-negative least-squares problem whose solution
 ///   tends to the minimum-norm one of the stationarity set as τ → 0. It is solved as a QP by

@@ -26,18 +26,17 @@ use std::path::PathBuf;
 #[allow(missing_docs)]
 pub struct RunArgs {
     /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
-    /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (README,
-    /// "Scene files"), whose `[solver]` settings apply unless the corresponding flag is given.
+    /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (docs/scene-files.md), whose `[solver]` settings apply unless the corresponding flag is given.
     #[arg(default_value = "balloons")]
     pub scene: String,
     /// Sub-problem backend (the backend registry, `contactlab_solvers::registry`).
     #[arg(long, default_value = "clarabel", help = backend_help())]
     pub backend: String,
     /// Mesh level: elements per membrane (balloons), edges of the ring (both default 40), or
-    /// the 3D scene's level (default: the scene's own, README "3D").
+    /// the 3D scene's level (default: the scene's own, docs/scenes.md).
     #[arg(long)]
     pub n: Option<usize>,
-    /// A scene parameter NAME=VALUE (ring: p, aspect, half_span; the 3D scenes: README
+    /// A scene parameter NAME=VALUE (ring: p, aspect, half_span; the 3D scenes: docs/scenes.md
     /// "3D"); repeatable.
     #[arg(long = "param")]
     pub params: Vec<String>,
@@ -71,7 +70,7 @@ pub struct RunArgs {
     /// Do not warm-start the QP duals (OSQP, Uzawa; Clarabel never warm-starts).
     #[arg(long)]
     pub no_warm_start: bool,
-    /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; README,
+    /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
     pub accuracy: Accuracy,

@@ -35,7 +35,7 @@ use std::time::Instant;
 /// Command-line arguments of `contactlab sweep`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct SweepArgs {
-    /// The sweep file (TOML; README, "Sweeps").
+    /// The sweep file (TOML; docs/sweeps.md).
     pub file: PathBuf,
     /// The CSV to write. It must not exist unless --resume is given.
     #[arg(long)]

@@ -1,6 +1,6 @@
 //! `contactlab plot CSV --x X --y Y[,Y2…] [--group COL[,COL…]] [--where COL=VALUE]… [--pareto]
 //! --out FILE.svg`: a log–log SVG of sweep columns, one series per group value and y column, with
-//! the fitted log–log slope of each series in its legend and on stdout (README, "Plots").
+//! the fitted log–log slope of each series in its legend and on stdout (docs/sweeps.md, "Plots").
 //!
 //! `X` (and each `Y`) is a column name, `1/COL`, `max(COL,COL)` or `1/max(COL,COL)`. Only
 //! rows with `status = converged` are plotted unless `--all-statuses` is given; rows whose x or
