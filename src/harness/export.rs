@@ -21,7 +21,7 @@ use std::path::PathBuf;
 /// Arguments of `contactlab export-qp`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ExportArgs {
-    /// Scene name (balloons or ring).
+    /// Built-in scene name (balloons, ring, sheets, rod, solids, balloons3d; docs/scenes.md).
     pub scene: String,
     /// Mesh level (elements per membrane for the balloons, edges for the ring).
     #[arg(long, default_value_t = 20)]
