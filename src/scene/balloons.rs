@@ -1,4 +1,4 @@
-//! The balloons scene of §7 (Figure 2), as fixed by SPEC §4.
+//! The balloons scene of §7 (Figure 2); docs/scenes.md.
 //!
 //! Box `[-1,1]²`, its boundary a fixed closed polyline. On each wall, centred, a support
 //! segment of length 1.6; a membrane (reference length 1.6, `n` uniform P1 edges,
@@ -13,6 +13,7 @@
 use super::Scene;
 use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh};
+use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
 /// Parameters of the balloons scene.
@@ -244,7 +245,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
     })
 }
 
-/// The equilibrium reached, read from the contact pattern (SPEC §4).
+/// The equilibrium reached, read from the contact pattern (docs/scenes.md).
 pub fn classify_state(touching: &[(usize, usize)]) -> String {
     let has = |a: usize, b: usize| {
         touching
@@ -266,6 +267,70 @@ pub fn classify_state(touching: &[(usize, usize)]) -> String {
         "symmetric".into()
     } else {
         format!("other({adjacent}_adjacent_pairs)")
+    }
+}
+
+/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`; level
+/// `n` elements per membrane, `h = 1.6/n`; end states classified by [`classify_state`].
+pub struct Balloons;
+
+impl BuiltinScene for Balloons {
+    fn name(&self) -> &'static str {
+        "balloons"
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        let mut p = BalloonsParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        for (k, &v) in params {
+            match k.as_str() {
+                "c" => p.c = v,
+                "mu" => p.mu = v,
+                "perturb0" => p.perturb[0] = v,
+                "perturb1" => p.perturb[1] = v,
+                "perturb2" => p.perturb[2] = v,
+                "perturb3" => p.perturb[3] = v,
+                other => anyhow::bail!(
+                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3)"
+                ),
+            }
+        }
+        Ok(build(&p)?)
+    }
+
+    /// `h = 1.6/n`, so `n = ⌈1.6/h⌉`.
+    fn n_for_h(&self, h: f64, _params: &Params) -> anyhow::Result<usize> {
+        let mut n = (1.6 / h).ceil().max(1.0) as usize;
+        // guard the rounding of 1.6/h
+        while n > 1 && 1.6 / ((n - 1) as f64) <= h {
+            n -= 1;
+        }
+        Ok(n)
+    }
+
+    fn classify_state(
+        &self,
+        mesh: &Mesh,
+        _x: &[f64],
+        _eps: f64,
+        pattern: &[(usize, usize)],
+    ) -> Option<String> {
+        // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
+        let balloon = |b: usize| {
+            mesh.bodies[b]
+                .name
+                .strip_prefix("balloon")
+                .and_then(|k| k.parse::<usize>().ok())
+                .filter(|&k| k < 4)
+        };
+        let balloon_pairs: Vec<(usize, usize)> = pattern
+            .iter()
+            .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
+            .collect();
+        Some(classify_state(&balloon_pairs))
     }
 }
 

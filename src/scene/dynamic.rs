@@ -20,6 +20,7 @@
 use super::Scene;
 use crate::energy::{Gravity, Gravity3d, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::registry::{count, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
 /// A scene for a dynamic run.
@@ -250,8 +251,8 @@ impl Default for DropParams {
 
 /// Builds `drop`: body 0 the ring (centre `(0, radius + height)`), body 1 the floor (the
 /// fixed polyline `y = 0`, `|x| ≤ floor_half_width`). Default Δt = 0.02, 300 steps (6 s: with
-/// the default ring the kinetic energy has decayed to ~1e-8 of the initial potential energy,
-/// see DYNAMICS_NOTES.md).
+/// the default ring the kinetic energy has decayed to ~1e-8 of the initial potential energy;
+/// docs/measurements.md).
 pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
     const S: &str = "drop";
     p.ring.validate(S)?;
@@ -648,6 +649,196 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
         dt: 0.005,
         steps: 80,
     })
+}
+
+/// The smallest level in `start..=400` whose dynamic scene has a mesh size at most `h`.
+fn dynamic_level(
+    s: &dyn BuiltinScene,
+    start: usize,
+    h: f64,
+    params: &Params,
+) -> anyhow::Result<usize> {
+    for n in start..=400 {
+        if s.dynamic(Some(n), None, params)?.0.scene.h <= h {
+            return Ok(n);
+        }
+    }
+    anyhow::bail!("h = {h} needs a level above the scene's n ≤ 400")
+}
+
+/// `drop` in the scene registry (dynamic only): parameters the fields of [`DropParams`] and
+/// its ring's (`layers`, `floor_edges` non-negative integers); level `n` the ring's cells
+/// around.
+pub struct Drop;
+
+impl BuiltinScene for Drop {
+    fn name(&self) -> &'static str {
+        "drop"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 8, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = DropParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.ring.n = n;
+        }
+        let mut layers = p.ring.layers as f64;
+        let mut floor_edges = p.floor_edges as f64;
+        set_fields(
+            "drop",
+            &mut (&mut p, &mut layers, &mut floor_edges),
+            params,
+            &[
+                ("mu", |p| &mut p.0.ring.mu),
+                ("lambda", |p| &mut p.0.ring.lambda),
+                ("radius", |p| &mut p.0.ring.radius),
+                ("inner", |p| &mut p.0.ring.inner),
+                ("layers", |p| &mut *p.1),
+                ("density", |p| &mut p.0.density),
+                ("g", |p| &mut p.0.g),
+                ("height", |p| &mut p.0.height),
+                ("floor_half_width", |p| &mut p.0.floor_half_width),
+                ("floor_edges", |p| &mut *p.2),
+            ],
+            &[],
+        )?;
+        p.ring.layers = count("drop", "layers", layers)?;
+        p.floor_edges = count("drop", "floor_edges", floor_edges)?;
+        Ok((drop(&p)?, serde_json::to_value(&p)?))
+    }
+}
+
+/// `collide` in the scene registry (dynamic only): parameters the fields of
+/// [`CollideParams`] and its rings' (`layers` a non-negative integer); level `n` the rings'
+/// cells around.
+pub struct Collide;
+
+impl BuiltinScene for Collide {
+    fn name(&self) -> &'static str {
+        "collide"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 8, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = CollideParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.ring.n = n;
+        }
+        let mut layers = p.ring.layers as f64;
+        set_fields(
+            "collide",
+            &mut (&mut p, &mut layers),
+            params,
+            &[
+                ("mu", |p| &mut p.0.ring.mu),
+                ("lambda", |p| &mut p.0.ring.lambda),
+                ("radius", |p| &mut p.0.ring.radius),
+                ("inner", |p| &mut p.0.ring.inner),
+                ("layers", |p| &mut *p.1),
+                ("density", |p| &mut p.0.density),
+                ("density_ratio", |p| &mut p.0.density_ratio),
+                ("gap", |p| &mut p.0.gap),
+                ("speed", |p| &mut p.0.speed),
+                ("offset_cells", |p| &mut p.0.offset_cells),
+            ],
+            &[],
+        )?;
+        p.ring.layers = count("collide", "layers", layers)?;
+        Ok((collide(&p)?, serde_json::to_value(&p)?))
+    }
+}
+
+/// `drop3d` in the scene registry (dynamic only): parameters the fields of [`Drop3dParams`];
+/// level `n` its own.
+pub struct Drop3d;
+
+impl BuiltinScene for Drop3d {
+    fn name(&self) -> &'static str {
+        "drop3d"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 1, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = Drop3dParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.n = n;
+        }
+        set_fields(
+            "drop3d",
+            &mut p,
+            params,
+            &[
+                ("half_size", |p| &mut p.half_size),
+                ("angle_deg", |p| &mut p.angle_deg),
+                ("tilt_deg", |p| &mut p.tilt_deg),
+                ("height", |p| &mut p.height),
+                ("obstacle_half_size", |p| &mut p.obstacle_half_size),
+                ("mu", |p| &mut p.mu),
+                ("lambda", |p| &mut p.lambda),
+                ("density", |p| &mut p.density),
+                ("g", |p| &mut p.g),
+            ],
+            &[],
+        )?;
+        Ok((drop3d(&p)?, serde_json::to_value(&p)?))
+    }
 }
 
 #[cfg(test)]

@@ -39,6 +39,7 @@ use super::Scene;
 use crate::contact::min_distance_3d_bvh;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
 use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use thiserror::Error;
@@ -346,6 +347,65 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         h,
         x0,
     })
+}
+
+/// The parameters of [`Solids`] at level `n` with ε, set from `NAME=VALUE` pairs.
+fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SolidsParams> {
+    let mut p = SolidsParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "solids",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("angle_deg", |p| &mut p.angle_deg),
+            ("upper_size", |p| &mut p.upper_size),
+            ("overlap", |p| &mut p.overlap),
+            ("gap", |p| &mut p.gap),
+            ("contrast", |p| &mut p.contrast),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+/// The `solids` scene in the scene registry: its parameters are the numeric fields of
+/// [`SolidsParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
+pub struct Solids;
+
+impl BuiltinScene for Solids {
+    fn name(&self) -> &'static str {
+        "solids"
+    }
+
+    fn default_n(&self) -> usize {
+        SolidsParams::default().n
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(build(&registry_params(n, eps, params)?)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(registry_params(
+            n, eps, params,
+        )?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        let base = registry_params(1, None, params)?;
+        first_level(h, 200, |n| mesh_size(&SolidsParams { n, ..base.clone() }))
+    }
 }
 
 #[cfg(test)]
