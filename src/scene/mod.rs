@@ -30,6 +30,7 @@
 //!
 //! `contactlab run wedge`, `--dynamic` (density 1, zero velocity) and sweeps then know it.
 
+pub mod assemble;
 pub mod balloons;
 pub mod balloons3d;
 pub mod dynamic;

@@ -8,13 +8,14 @@ use super::contact::describe;
 use super::schema::{
     BodySpec, ContactSpec, DynamicsSpec, GasSpec, MaterialSpec, PressureSpec, SolverSpec, WeldSpec,
 };
-use super::topology::{boundary_edges, boundary_faces, chain};
+use super::topology::chain;
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
 use crate::energy::{
     Energy, Gas3dEnergy, GasEnergy, Gravity, Gravity3d, Membrane3dEnergy, MembraneEnergy,
     NeoHookean2d, NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
 };
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use crate::scene::Scene;
 use std::path::Path;
@@ -71,8 +72,10 @@ impl Ctx<'_> {
         } = header;
         let nb = loaded.len();
         let (global, welded) = self.resolve_welds(&welds, &loaded)?;
-        let (mut mesh, x0) = place_vertices(dim, &loaded, &global);
-        let body_elements = body_meshes(&mut mesh, &loaded, &global);
+        let (x_ref, fixed, x0) = place_vertices(dim, &loaded, &global);
+        let parts = body_parts(&loaded, &global);
+        let mut mesh = assemble_mesh(dim, x_ref, fixed, &parts, &file_order(nb));
+        let body_elements: Vec<Vec<[usize; 4]>> = parts.into_iter().map(|p| p.elements).collect();
         let (h, body_all_fixed) = mesh_size(&mesh);
         let energy = self.energy_terms(
             &mesh,
@@ -549,113 +552,53 @@ impl Ctx<'_> {
     }
 }
 
-/// The mesh's vertices (`global`: each body's local vertex → mesh vertex): positions of a
-/// welded vertex are those of its first occurrence (body order); it is fixed if any of its
-/// occurrences is. Returns the mesh (x_ref, fixed) and φ_0.
-fn place_vertices(dim: usize, loaded: &[Loaded], global: &[Vec<usize>]) -> (Mesh, Vec<f64>) {
-    let mut mesh = Mesh {
-        dim,
-        ..Default::default()
-    };
+/// The vertices in mesh numbering (`global[b][k]`: vertex `k` of body `b`): reference
+/// positions, fixed flags (fixed in any body that holds it), start positions. A welded vertex
+/// takes the positions of the first body that holds it.
+fn place_vertices(
+    dim: usize,
+    loaded: &[Loaded],
+    global: &[Vec<usize>],
+) -> (Vec<f64>, Vec<bool>, Vec<f64>) {
     let nv = global.iter().flatten().copied().max().map_or(0, |m| m + 1);
     let mut x0 = vec![0.0; dim * nv];
-    mesh.x_ref = vec![0.0; dim * nv];
-    mesh.fixed = vec![false; nv];
+    let mut x_ref = vec![0.0; dim * nv];
+    let mut fixed = vec![false; nv];
     let mut seen = vec![false; nv];
     for (l, map) in loaded.iter().zip(global) {
         for (k, &v) in map.iter().enumerate() {
             if !seen[v] {
                 seen[v] = true;
-                mesh.x_ref[dim * v..dim * v + dim].copy_from_slice(&l.x_ref[k][..dim]);
+                x_ref[dim * v..dim * v + dim].copy_from_slice(&l.x_ref[k][..dim]);
                 x0[dim * v..dim * v + dim].copy_from_slice(&l.x0[k][..dim]);
             }
-            mesh.fixed[v] |= l.fixed[k];
+            fixed[v] |= l.fixed[k];
         }
     }
-    (mesh, x0)
+    (x_ref, fixed, x0)
 }
 
-/// Each body's elements in mesh numbering, its contact edges and faces (a curve: its
-/// elements; a 2D solid: its boundary edges; a surface: its triangles and their edges; a 3D
-/// solid: its boundary faces and their edges) and its h (longest reference edge of its
-/// elements). Returns the elements of each body.
-fn body_meshes(mesh: &mut Mesh, loaded: &[Loaded], global: &[Vec<usize>]) -> Vec<Vec<[usize; 4]>> {
-    let dim = mesh.dim;
-    let mut body_elements: Vec<Vec<[usize; 4]>> = Vec::with_capacity(loaded.len());
-    for (bi, l) in loaded.iter().enumerate() {
-        let map = &global[bi];
-        let els: Vec<[usize; 4]> = l
-            .elems
-            .iter()
-            .map(|e| std::array::from_fn(|k| if k < l.arity { map[e[k]] } else { 0 }))
-            .collect();
-        let mut body = Body {
+/// The loaded bodies in mesh numbering, for the shared assembler ([`assemble_mesh`]): each
+/// body's elements, its h the longest reference edge of its elements.
+fn body_parts(loaded: &[Loaded], global: &[Vec<usize>]) -> Vec<BodyPart> {
+    loaded
+        .iter()
+        .zip(global)
+        .map(|(l, map)| BodyPart {
             name: l.name.clone(),
             kind: l.kind,
             vertices: map.clone(),
-            ..Default::default()
-        };
-        let push_edges = |mesh: &mut Mesh, body: &mut Body, edges: Vec<[usize; 2]>| {
-            for e in edges {
-                body.edges.push(mesh.edges.len());
-                mesh.edges.push(e);
-                mesh.edge_body.push(bi);
-            }
-        };
-        let tri = |e: &[usize; 4]| [e[0], e[1], e[2]];
-        match (l.kind, dim) {
-            (BodyKind::Curve, _) => {
-                push_edges(mesh, &mut body, els.iter().map(|e| [e[0], e[1]]).collect());
-            }
-            (BodyKind::Solid, 2) => {
-                for e in &els {
-                    body.triangles.push(mesh.triangles.len());
-                    mesh.triangles.push(tri(e));
-                }
-                let tris: Vec<[usize; 3]> = els.iter().map(tri).collect();
-                push_edges(mesh, &mut body, boundary_edges(&tris));
-            }
-            (BodyKind::Surface, _) => {
-                let tris: Vec<[usize; 3]> = els.iter().map(tri).collect();
-                for t in &tris {
-                    body.triangles.push(mesh.triangles.len());
-                    mesh.triangles.push(*t);
-                    body.faces.push(mesh.faces.len());
-                    mesh.faces.push(*t);
-                    mesh.face_body.push(bi);
-                }
-                push_edges(mesh, &mut body, crate::scene::sheets::unique_edges(&tris));
-            }
-            (BodyKind::Solid, _) => {
-                for e in &els {
-                    body.tets.push(mesh.tets.len());
-                    mesh.tets.push(*e);
-                }
-                let faces = boundary_faces(&els);
-                for f in &faces {
-                    body.faces.push(mesh.faces.len());
-                    mesh.faces.push(*f);
-                    mesh.face_body.push(bi);
-                }
-                push_edges(mesh, &mut body, crate::scene::sheets::unique_edges(&faces));
-            }
-        }
-        // h: the longest reference edge of the body's elements
-        let mut h: f64 = 0.0;
-        for e in &els {
-            for a in 0..l.arity {
-                for b in a + 1..l.arity {
-                    h = h.max(
-                        (mesh.point(&mesh.x_ref, e[a]) - mesh.point(&mesh.x_ref, e[b])).norm(),
-                    );
-                }
-            }
-        }
-        body.h = h;
-        mesh.bodies.push(body);
-        body_elements.push(els);
-    }
-    body_elements
+            elements: l
+                .elems
+                .iter()
+                .map(|e| std::array::from_fn(|k| if k < l.arity { map[e[k]] } else { 0 }))
+                .collect(),
+            arity: l.arity,
+            h: None,
+            edges: None,
+            faces: None,
+        })
+        .collect()
 }
 
 /// h: the mesh size of the bodies that deform (a body whose vertices are all fixed is an

@@ -72,7 +72,7 @@ mod assemble;
 mod body;
 mod contact;
 mod schema;
-mod topology;
+pub(crate) mod topology;
 mod validate;
 mod welds;
 

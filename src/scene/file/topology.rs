@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 
 /// Edges of exactly one triangle (the boundary of a 2D triangle mesh), as stored in their
 /// triangle, sorted.
-pub(super) fn boundary_edges(tris: &[[usize; 3]]) -> Vec<[usize; 2]> {
+pub(crate) fn boundary_edges(tris: &[[usize; 3]]) -> Vec<[usize; 2]> {
     let mut count: HashMap<[usize; 2], ([usize; 2], usize)> = HashMap::new();
     for t in tris {
         for k in 0..3 {
@@ -24,7 +24,7 @@ pub(super) fn boundary_edges(tris: &[[usize; 3]]) -> Vec<[usize; 2]> {
 }
 
 /// Faces of exactly one (positively oriented) tetrahedron, oriented outward, sorted.
-pub(super) fn boundary_faces(tets: &[[usize; 4]]) -> Vec<[usize; 3]> {
+pub(crate) fn boundary_faces(tets: &[[usize; 4]]) -> Vec<[usize; 3]> {
     let mut count: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
     for t in tets {
         // outward faces of a positive tet [0, 1, 2, 3]
