@@ -12,7 +12,8 @@
 
 use super::Scene;
 use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh};
+use crate::scene::assemble::{assemble_mesh, BodyPart};
+use crate::scene::mesh::{BodyKind, Mesh};
 use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
@@ -157,19 +158,21 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             }
         }
     }
-    let mut edges: Vec<[usize; 2]> = Vec::new();
-    let mut edge_body = Vec::new();
-    let mut bodies = Vec::new();
     let nb = box_vertices.len();
-    let box_edges: Vec<usize> = (0..nb)
-        .map(|i| {
-            edges.push([box_vertices[i], box_vertices[(i + 1) % nb]]);
-            edge_body.push(4);
-            edges.len() - 1
-        })
-        .collect();
+    let box_part = BodyPart {
+        name: "box".into(),
+        kind: BodyKind::Curve,
+        vertices: box_vertices.clone(),
+        elements: (0..nb)
+            .map(|i| [box_vertices[i], box_vertices[(i + 1) % nb], 0, 0])
+            .collect(),
+        arity: 2,
+        h: Some(0.2),
+        edges: None,
+        faces: None,
+    };
     let mut energy = TotalEnergy::default();
-    let mut membranes = Vec::new();
+    let mut parts = Vec::new();
     for k in 0..4 {
         // Membrane vertices from the support's left end to its right end (in wall frame).
         let mut verts = vec![support_ends[k][0]];
@@ -187,54 +190,31 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             verts.push(v);
         }
         verts.push(support_ends[k][1]);
-        let mut body_edges = Vec::new();
-        let mut medges = Vec::new();
-        for w in verts.windows(2) {
-            edges.push([w[0], w[1]]);
-            edge_body.push(k);
-            body_edges.push(edges.len() - 1);
-            medges.push([w[0], w[1]]);
-        }
-        membranes.push((verts.clone(), medges));
-        bodies.push(Body {
+        parts.push(BodyPart {
             name: format!("balloon{k}"),
             kind: BodyKind::Curve,
-            h,
+            elements: verts.windows(2).map(|w| [w[0], w[1], 0, 0]).collect(),
             vertices: verts,
-            edges: body_edges,
-            triangles: vec![],
-            ..Default::default()
+            arity: 2,
+            h: Some(h),
+            edges: None,
+            faces: None,
         });
     }
-    bodies.push(Body {
-        name: "box".into(),
-        kind: BodyKind::Curve,
-        h: 0.2,
-        vertices: box_vertices,
-        edges: box_edges,
-        triangles: vec![],
-        ..Default::default()
-    });
-    for (k, (verts, medges)) in membranes.into_iter().enumerate() {
+    parts.push(box_part);
+    for (k, part) in parts[..4].iter().enumerate() {
+        let medges: Vec<[usize; 2]> = part.elements.iter().map(|e| [e[0], e[1]]).collect();
         energy
             .terms
             .push(Box::new(MembraneEnergy::new(medges, &x_ref, p.mu)));
         energy.terms.push(Box::new(GasEnergy::new(
-            verts,
+            part.vertices.clone(),
             p.c * (1.0 + p.perturb[k]),
             &x0,
         )));
     }
-    let mesh = Mesh {
-        dim: 2,
-        x_ref,
-        fixed,
-        edges,
-        edge_body,
-        triangles: vec![],
-        bodies,
-        ..Default::default()
-    };
+    // The box (body 4) was numbered first: its edges come first too.
+    let mesh = assemble_mesh(2, x_ref, fixed, &parts, &[4, 0, 1, 2, 3]);
     Ok(Scene {
         name: "balloons".into(),
         mesh,
