@@ -34,7 +34,8 @@
 use super::Scene;
 use crate::contact::broad_phase::{min_distance_near, point_edge_near, NearPair};
 use crate::energy::{MembraneEnergy, PressureEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, Mesh};
 use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
@@ -212,24 +213,17 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
         fixed[n / 2] = true;
     }
     let edges: Vec<[usize; 2]> = (0..n).map(|k| [k, (k + 1) % n]).collect();
-    let mesh = Mesh {
-        dim: 2,
-        x_ref: x_ref.clone(),
-        fixed,
-        edges: edges.clone(),
-        edge_body: vec![0; n],
-        triangles: vec![],
-        bodies: vec![Body {
-            name: "ring".into(),
-            kind: BodyKind::Curve,
-            h,
-            vertices: (0..n).collect(),
-            edges: (0..n).collect(),
-            triangles: vec![],
-            ..Default::default()
-        }],
-        ..Default::default()
+    let ring = BodyPart {
+        name: "ring".into(),
+        kind: BodyKind::Curve,
+        vertices: (0..n).collect(),
+        elements: edges.iter().map(|e| [e[0], e[1], 0, 0]).collect(),
+        arity: 2,
+        h: Some(h),
+        edges: None,
+        faces: None,
     };
+    let mesh = assemble_mesh(2, x_ref.clone(), fixed, &[ring], &file_order(1));
     let md = min_distance_near(&mesh, &x0, 2.0 * eps, false);
     if md.distance < eps {
         return Err(RingError::InadmissibleStart {
