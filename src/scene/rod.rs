@@ -51,7 +51,8 @@
 use super::Scene;
 use crate::contact::min_distance_3d_bvh;
 use crate::energy::{Gravity3d, String3dEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
@@ -322,26 +323,17 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
     }
     let edges: Vec<[usize; 2]> = (0..nv - 1).map(|k| [k, k + 1]).collect();
     let x0: Vec<f64> = x0.into_iter().flatten().collect();
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edge_body: vec![0; edges.len()],
-        edges: edges.clone(),
-        triangles: vec![],
-        faces: vec![],
-        face_body: vec![],
-        tets: vec![],
-        bodies: vec![Body {
-            name: "rod".into(),
-            kind: BodyKind::Curve,
-            h,
-            vertices: (0..nv).collect(),
-            edges: (0..nv - 1).collect(),
-            ..Default::default()
-        }],
-        contact_filter: None,
+    let rod = BodyPart {
+        name: "rod".into(),
+        kind: BodyKind::Curve,
+        vertices: (0..nv).collect(),
+        elements: edges.iter().map(|e| [e[0], e[1], 0, 0]).collect(),
+        arity: 2,
+        h: Some(h),
+        edges: None,
+        faces: None,
     };
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &[rod], &file_order(1));
     mesh.validate()?;
     let (distance, pair) =
         min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
