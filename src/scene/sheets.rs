@@ -51,7 +51,8 @@
 use super::Scene;
 use crate::contact::min_distance_3d_bvh;
 use crate::energy::{Gravity3d, Membrane3dEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
@@ -272,42 +273,32 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     }
     let lower_tris = grid_tris.clone();
     let upper_tris: Vec<[usize; 3]> = grid_tris.iter().map(|t| t.map(|v| v + np)).collect();
-    let lower_edges = unique_edges(&lower_tris);
-    let upper_edges = unique_edges(&upper_tris);
-    let (nt, ne) = (lower_tris.len(), lower_edges.len());
-    let triangles: Vec<[usize; 3]> = lower_tris.iter().chain(&upper_tris).copied().collect();
-    let edges: Vec<[usize; 2]> = lower_edges.iter().chain(&upper_edges).copied().collect();
-    let body = |name: &str, b: usize, bh: f64| Body {
+    let sq2 = std::f64::consts::SQRT_2;
+    let part = |name: &str, b: usize, tris: &[[usize; 3]], bh: f64| BodyPart {
         name: name.into(),
         kind: BodyKind::Surface,
-        h: bh,
         vertices: (b * np..(b + 1) * np).collect(),
-        edges: (b * ne..(b + 1) * ne).collect(),
-        triangles: (b * nt..(b + 1) * nt).collect(),
-        faces: (b * nt..(b + 1) * nt).collect(),
-        tets: vec![],
+        elements: tris.iter().map(|t| [t[0], t[1], t[2], 0]).collect(),
+        arity: 3,
+        h: Some(bh),
+        edges: None,
+        faces: None,
     };
-    let sq2 = std::f64::consts::SQRT_2;
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edge_body: (0..2 * ne).map(|e| e / ne).collect(),
-        edges,
-        faces: triangles.clone(),
-        face_body: (0..2 * nt).map(|t| t / nt).collect(),
-        triangles,
-        tets: vec![],
-        bodies: vec![
-            body("lower", 0, 2.0 * sq2 / (m as f64 * p.stretch_lower)),
-            body(
-                "upper",
-                1,
-                2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
-            ),
-        ],
-        contact_filter: None,
-    };
+    let parts = [
+        part(
+            "lower",
+            0,
+            &lower_tris,
+            2.0 * sq2 / (m as f64 * p.stretch_lower),
+        ),
+        part(
+            "upper",
+            1,
+            &upper_tris,
+            2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
+        ),
+    ];
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let (distance, pair) =
         min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
