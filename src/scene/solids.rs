@@ -34,11 +34,13 @@
 //! faces of the lower one and conversely) and edge–edge rows (the 20° rotation makes the
 //! edges cross) are active. The fixed bottom and top faces leave no rigid motion.
 
+#[cfg(test)]
 use super::sheets::unique_edges;
 use super::Scene;
 use crate::contact::min_distance_3d_bvh;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use nalgebra::Vector3;
 use std::collections::HashMap;
@@ -284,35 +286,22 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         .collect();
     let lower_faces = cube_faces.clone();
     let upper_faces: Vec<[usize; 3]> = cube_faces.iter().map(|f| f.map(|v| v + np)).collect();
-    let lower_edges = unique_edges(&lower_faces);
-    let upper_edges = unique_edges(&upper_faces);
-    let (nf, ne, nt) = (lower_faces.len(), lower_edges.len(), cube_tets.len());
-    let body = |name: &str, b: usize, bh: f64| Body {
+    let nt = cube_tets.len();
+    let part = |name: &str, b: usize, faces: Vec<[usize; 3]>, bh: f64| BodyPart {
         name: name.into(),
         kind: BodyKind::Solid,
-        h: bh,
         vertices: (b * np..(b + 1) * np).collect(),
-        edges: (b * ne..(b + 1) * ne).collect(),
-        triangles: vec![],
-        faces: (b * nf..(b + 1) * nf).collect(),
-        tets: (b * nt..(b + 1) * nt).collect(),
+        elements: tets[b * nt..(b + 1) * nt].to_vec(),
+        arity: 4,
+        h: Some(bh),
+        edges: None,
+        faces: Some(faces),
     };
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edges: lower_edges.iter().chain(&upper_edges).copied().collect(),
-        edge_body: (0..2 * ne).map(|e| e / ne).collect(),
-        triangles: vec![],
-        faces: lower_faces.iter().chain(&upper_faces).copied().collect(),
-        face_body: (0..2 * nf).map(|f| f / nf).collect(),
-        tets: tets.clone(),
-        bodies: vec![
-            body("lower", 0, 3f64.sqrt() / m as f64),
-            body("upper", 1, 3f64.sqrt() * s / m as f64),
-        ],
-        contact_filter: None,
-    };
+    let parts = [
+        part("lower", 0, lower_faces, 3f64.sqrt() / m as f64),
+        part("upper", 1, upper_faces, 3f64.sqrt() * s / m as f64),
+    ];
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let (distance, pair) =
         min_distance_3d_bvh(&x0, &mesh.contact_vertices(), &mesh.edges, &mesh.faces, eps);
