@@ -22,7 +22,6 @@ use crate::output::vtk::{write_vtu, PvdSeries};
 use crate::output::write_atomic;
 use crate::scene::dynamic::DynamicScene;
 use crate::scene::registry;
-use crate::scene::registry::DYNAMIC_SCENES;
 use crate::solve::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
 use crate::solve::outer::OuterSettings;
 use crate::solve::settings::RunSettings;
@@ -90,7 +89,7 @@ pub fn run_dynamic(a: &RunArgs, rs: &RunSettings) -> Result<()> {
         params.insert("c".into(), c);
     }
     let (ds, params_json) = registry::build_dynamic_scene_json(&a.scene, a.n, a.eps, &params)?;
-    let is_dynamic_scene = DYNAMIC_SCENES.contains(&a.scene.as_str());
+    let is_dynamic_scene = registry::is_dynamic_only(&a.scene);
     let dt = a.dt.unwrap_or(ds.dt);
     let steps = a.steps.unwrap_or(ds.steps);
     if !is_dynamic_scene && (a.dt.is_none() || a.steps.is_none()) {

@@ -12,7 +12,7 @@ use crate::harness::{case, dynamic_run};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
 use crate::output::vtk::{write_vtu, PvdSeries};
 use crate::output::write_atomic;
-use crate::scene::balloons::{self, classify_state, BalloonsParams};
+use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus};
@@ -298,7 +298,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     if a.dt.is_some() || a.steps.is_some() || a.scheme.is_some() {
         bail!("--dt, --steps and --scheme are options of a dynamic run: add --dynamic");
     }
-    if registry::DYNAMIC_SCENES.contains(&a.scene.as_str()) {
+    if registry::is_dynamic_only(&a.scene) {
         bail!(
             "scene {:?} is a dynamic scene: run it with --dynamic [--dt DT --steps K --scheme euler|newmark]",
             a.scene
@@ -492,25 +492,8 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         .iter()
         .map(|&(i, j)| [mesh.bodies[i].name.clone(), mesh.bodies[j].name.clone()])
         .collect();
-    let state = match scene.name.as_str() {
-        "ring" => ring::classify_state(mesh, &res.x, scene.eps),
-        "balloons" => {
-            // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
-            let balloon = |b: usize| {
-                mesh.bodies[b]
-                    .name
-                    .strip_prefix("balloon")
-                    .and_then(|k| k.parse::<usize>().ok())
-                    .filter(|&k| k < 4)
-            };
-            let balloon_pairs: Vec<(usize, usize)> = pattern
-                .iter()
-                .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
-                .collect();
-            classify_state(&balloon_pairs)
-        }
-        _ => contact_state(&names),
-    };
+    let state = registry::classify_state(&scene.name, mesh, &res.x, scene.eps, &pattern)
+        .unwrap_or_else(|| contact_state(&names));
     // Picture: initial, an intermediate and the final shapes, J beside them.
     let mid = snapshots.len() / 2;
     let panels = [

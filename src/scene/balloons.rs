@@ -1,4 +1,4 @@
-//! The balloons scene of §7 (Figure 2), as fixed by SPEC §4.
+//! The balloons scene of §7 (Figure 2); docs/scenes.md.
 //!
 //! Box `[-1,1]²`, its boundary a fixed closed polyline. On each wall, centred, a support
 //! segment of length 1.6; a membrane (reference length 1.6, `n` uniform P1 edges,
@@ -12,7 +12,9 @@
 
 use super::Scene;
 use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh};
+use crate::scene::assemble::{assemble_mesh, BodyPart};
+use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
 /// Parameters of the balloons scene.
@@ -156,19 +158,21 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             }
         }
     }
-    let mut edges: Vec<[usize; 2]> = Vec::new();
-    let mut edge_body = Vec::new();
-    let mut bodies = Vec::new();
     let nb = box_vertices.len();
-    let box_edges: Vec<usize> = (0..nb)
-        .map(|i| {
-            edges.push([box_vertices[i], box_vertices[(i + 1) % nb]]);
-            edge_body.push(4);
-            edges.len() - 1
-        })
-        .collect();
+    let box_part = BodyPart {
+        name: "box".into(),
+        kind: BodyKind::Curve,
+        vertices: box_vertices.clone(),
+        elements: (0..nb)
+            .map(|i| [box_vertices[i], box_vertices[(i + 1) % nb], 0, 0])
+            .collect(),
+        arity: 2,
+        h: Some(0.2),
+        edges: None,
+        faces: None,
+    };
     let mut energy = TotalEnergy::default();
-    let mut membranes = Vec::new();
+    let mut parts = Vec::new();
     for k in 0..4 {
         // Membrane vertices from the support's left end to its right end (in wall frame).
         let mut verts = vec![support_ends[k][0]];
@@ -186,54 +190,31 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             verts.push(v);
         }
         verts.push(support_ends[k][1]);
-        let mut body_edges = Vec::new();
-        let mut medges = Vec::new();
-        for w in verts.windows(2) {
-            edges.push([w[0], w[1]]);
-            edge_body.push(k);
-            body_edges.push(edges.len() - 1);
-            medges.push([w[0], w[1]]);
-        }
-        membranes.push((verts.clone(), medges));
-        bodies.push(Body {
+        parts.push(BodyPart {
             name: format!("balloon{k}"),
             kind: BodyKind::Curve,
-            h,
+            elements: verts.windows(2).map(|w| [w[0], w[1], 0, 0]).collect(),
             vertices: verts,
-            edges: body_edges,
-            triangles: vec![],
-            ..Default::default()
+            arity: 2,
+            h: Some(h),
+            edges: None,
+            faces: None,
         });
     }
-    bodies.push(Body {
-        name: "box".into(),
-        kind: BodyKind::Curve,
-        h: 0.2,
-        vertices: box_vertices,
-        edges: box_edges,
-        triangles: vec![],
-        ..Default::default()
-    });
-    for (k, (verts, medges)) in membranes.into_iter().enumerate() {
+    parts.push(box_part);
+    for (k, part) in parts[..4].iter().enumerate() {
+        let medges: Vec<[usize; 2]> = part.elements.iter().map(|e| [e[0], e[1]]).collect();
         energy
             .terms
             .push(Box::new(MembraneEnergy::new(medges, &x_ref, p.mu)));
         energy.terms.push(Box::new(GasEnergy::new(
-            verts,
+            part.vertices.clone(),
             p.c * (1.0 + p.perturb[k]),
             &x0,
         )));
     }
-    let mesh = Mesh {
-        dim: 2,
-        x_ref,
-        fixed,
-        edges,
-        edge_body,
-        triangles: vec![],
-        bodies,
-        ..Default::default()
-    };
+    // The box (body 4) was numbered first: its edges come first too.
+    let mesh = assemble_mesh(2, x_ref, fixed, &parts, &[4, 0, 1, 2, 3]);
     Ok(Scene {
         name: "balloons".into(),
         mesh,
@@ -244,7 +225,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
     })
 }
 
-/// The equilibrium reached, read from the contact pattern (SPEC §4).
+/// The equilibrium reached, read from the contact pattern (docs/scenes.md).
 pub fn classify_state(touching: &[(usize, usize)]) -> String {
     let has = |a: usize, b: usize| {
         touching
@@ -266,6 +247,70 @@ pub fn classify_state(touching: &[(usize, usize)]) -> String {
         "symmetric".into()
     } else {
         format!("other({adjacent}_adjacent_pairs)")
+    }
+}
+
+/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`; level
+/// `n` elements per membrane, `h = 1.6/n`; end states classified by [`classify_state`].
+pub struct Balloons;
+
+impl BuiltinScene for Balloons {
+    fn name(&self) -> &'static str {
+        "balloons"
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        let mut p = BalloonsParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        for (k, &v) in params {
+            match k.as_str() {
+                "c" => p.c = v,
+                "mu" => p.mu = v,
+                "perturb0" => p.perturb[0] = v,
+                "perturb1" => p.perturb[1] = v,
+                "perturb2" => p.perturb[2] = v,
+                "perturb3" => p.perturb[3] = v,
+                other => anyhow::bail!(
+                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3)"
+                ),
+            }
+        }
+        Ok(build(&p)?)
+    }
+
+    /// `h = 1.6/n`, so `n = ⌈1.6/h⌉`.
+    fn n_for_h(&self, h: f64, _params: &Params) -> anyhow::Result<usize> {
+        let mut n = (1.6 / h).ceil().max(1.0) as usize;
+        // guard the rounding of 1.6/h
+        while n > 1 && 1.6 / ((n - 1) as f64) <= h {
+            n -= 1;
+        }
+        Ok(n)
+    }
+
+    fn classify_state(
+        &self,
+        mesh: &Mesh,
+        _x: &[f64],
+        _eps: f64,
+        pattern: &[(usize, usize)],
+    ) -> Option<String> {
+        // by name: a scene file lists the box first (experiments/scenes/balloons.toml)
+        let balloon = |b: usize| {
+            mesh.bodies[b]
+                .name
+                .strip_prefix("balloon")
+                .and_then(|k| k.parse::<usize>().ok())
+                .filter(|&k| k < 4)
+        };
+        let balloon_pairs: Vec<(usize, usize)> = pattern
+            .iter()
+            .filter_map(|&(i, j)| Some((balloon(i)?, balloon(j)?)))
+            .collect();
+        Some(classify_state(&balloon_pairs))
     }
 }
 

@@ -39,7 +39,9 @@ use super::sheets::unique_edges;
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gas3dEnergy, Membrane3dEnergy, OpenSurface, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 use thiserror::Error;
@@ -345,7 +347,6 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
     let zc = -BOX[2] + p.pad_gap + p.radius * pad_depth;
     let mut x = Vec::new();
     let mut fixed = Vec::new();
-    let mut triangles: Vec<[usize; 3]> = Vec::new();
     let mut bodies_tris: Vec<Vec<[usize; 3]>> = Vec::new();
     for (k, &xc) in CENTRES_X.iter().enumerate() {
         let turn = Rotation3::from_axis_angle(
@@ -368,7 +369,6 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
             fixed.push(sphere_tris[pad].contains(&v));
         }
         let tris: Vec<[usize; 3]> = sphere_tris.iter().map(|t| t.map(|v| v + off)).collect();
-        triangles.extend_from_slice(&tris);
         bodies_tris.push(tris);
     }
     let (box_pts, box_local) = box_surface(2 * p.n, p.n, p.n);
@@ -378,60 +378,40 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
         fixed.push(true);
     }
     let box_tris: Vec<[usize; 3]> = box_local.iter().map(|t| t.map(|v| v + box_off)).collect();
-    triangles.extend_from_slice(&box_tris);
     bodies_tris.push(box_tris);
     let nv = box_off + box_pts.len();
     let names = ["balloon0", "balloon1", "box"];
-    let mut edges = Vec::new();
-    let mut edge_body = Vec::new();
-    let mut face_body = Vec::new();
-    let mut bodies = Vec::new();
-    let mut tri_start = 0;
-    for (b, tris) in bodies_tris.iter().enumerate() {
-        let be = unique_edges(tris);
-        let e0 = edges.len();
-        edges.extend_from_slice(&be);
-        edge_body.extend(std::iter::repeat_n(b, be.len()));
-        face_body.extend(std::iter::repeat_n(b, tris.len()));
-        let vertices: Vec<usize> = if b < 2 {
-            (b * nb..(b + 1) * nb).collect()
-        } else {
-            (box_off..nv).collect()
-        };
-        let bh = be
-            .iter()
-            .map(|e| {
-                (0..3)
-                    .map(|c| (x[3 * e[1] + c] - x[3 * e[0] + c]).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .fold(0.0, f64::max);
-        bodies.push(Body {
-            name: names[b].into(),
-            kind: BodyKind::Surface,
-            h: bh,
-            vertices,
-            edges: (e0..edges.len()).collect(),
-            triangles: (tri_start..tri_start + tris.len()).collect(),
-            faces: (tri_start..tri_start + tris.len()).collect(),
-            tets: vec![],
-        });
-        tri_start += tris.len();
-    }
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x.clone(),
-        fixed,
-        edges,
-        edge_body,
-        faces: triangles.clone(),
-        face_body,
-        triangles,
-        tets: vec![],
-        bodies,
-        contact_filter: None,
-    };
+    let parts: Vec<BodyPart> = bodies_tris
+        .iter()
+        .enumerate()
+        .map(|(b, tris)| {
+            // h: the longest edge of the body's triangles
+            let bh = unique_edges(tris)
+                .iter()
+                .map(|e| {
+                    (0..3)
+                        .map(|c| (x[3 * e[1] + c] - x[3 * e[0] + c]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .fold(0.0, f64::max);
+            BodyPart {
+                name: names[b].into(),
+                kind: BodyKind::Surface,
+                vertices: if b < 2 {
+                    (b * nb..(b + 1) * nb).collect()
+                } else {
+                    (box_off..nv).collect()
+                },
+                elements: tris.iter().map(|t| [t[0], t[1], t[2], 0]).collect(),
+                arity: 3,
+                h: Some(bh),
+                edges: None,
+                faces: None,
+            }
+        })
+        .collect();
+    let mesh = assemble_mesh(3, x.clone(), fixed, &parts, &file_order(3));
     mesh.validate()?;
     let (distance, pair) = min_distance_3d(&mesh, &x, eps);
     if distance < eps {
@@ -461,6 +441,68 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
         h,
         x0: x,
     })
+}
+
+/// The parameters of [`Balloons3d`] at level `n` with ε, set from `NAME=VALUE` pairs.
+fn registry_params(
+    n: usize,
+    eps: Option<f64>,
+    params: &Params,
+) -> anyhow::Result<Balloons3dParams> {
+    let mut p = Balloons3dParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "balloons3d",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("c", |p| &mut p.c),
+            ("radius", |p| &mut p.radius),
+            ("pad_gap", |p| &mut p.pad_gap),
+            ("twist_deg", |p| &mut p.twist_deg),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+/// The `balloons3d` scene in the scene registry: its parameters are the numeric fields of
+/// [`Balloons3dParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
+pub struct Balloons3d;
+
+impl BuiltinScene for Balloons3d {
+    fn name(&self) -> &'static str {
+        "balloons3d"
+    }
+
+    fn default_n(&self) -> usize {
+        Balloons3dParams::default().n
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(build(&registry_params(n, eps, params)?)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(registry_params(
+            n, eps, params,
+        )?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        let base = registry_params(1, None, params)?;
+        first_level(h, 7, |n| mesh_size(&Balloons3dParams { n, ..base.clone() }))
+    }
 }
 
 #[cfg(test)]

@@ -19,7 +19,9 @@
 
 use super::Scene;
 use crate::energy::{Gravity, Gravity3d, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::registry::{count, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
 /// A scene for a dynamic run.
@@ -55,6 +57,11 @@ pub enum DynamicSceneError {
     /// The generated mesh is invalid.
     #[error("invalid mesh: {0}")]
     Mesh(#[from] MeshError),
+}
+
+/// A 2D solid's triangles (its elements).
+fn triangles(part: &BodyPart) -> Vec<[usize; 3]> {
+    part.elements.iter().map(|e| [e[0], e[1], e[2]]).collect()
 }
 
 fn positive(scene: &'static str, name: &'static str, v: f64) -> Result<(), DynamicSceneError> {
@@ -143,26 +150,28 @@ impl RingSolid {
         Ok(())
     }
 
-    /// Appends the ring centred at `centre` to the mesh (as body `name`) and returns its
-    /// triangles (global vertex indices, counter-clockwise). Vertex `k·n + j` of the ring is
-    /// on layer k (radius `inner + k (radius − inner)/layers`) at angle `2π(j + offset_cells)/n`.
+    /// Appends the ring centred at `centre` to the vertices (`x_ref`, `fixed`) and returns it
+    /// as body `name` for [`assemble_mesh`]: its triangles (global vertex indices,
+    /// counter-clockwise) and its contact edges, the inner circle then the outer. Vertex
+    /// `k·n + j` of the ring is on layer k (radius `inner + k (radius − inner)/layers`) at
+    /// angle `2π(j + offset_cells)/n`.
     fn append(
         &self,
-        mesh: &mut Mesh,
+        x_ref: &mut Vec<f64>,
+        fixed: &mut Vec<bool>,
         name: &str,
         centre: [f64; 2],
         offset_cells: f64,
-    ) -> Vec<[usize; 3]> {
+    ) -> BodyPart {
         let (n, l) = (self.n, self.layers);
-        let base = mesh.x_ref.len() / 2;
+        let base = x_ref.len() / 2;
         for k in 0..=l {
             let r = self.inner + (self.radius - self.inner) * k as f64 / l as f64;
             for j in 0..n {
                 let (s, c) =
                     (2.0 * std::f64::consts::PI * (j as f64 + offset_cells) / n as f64).sin_cos();
-                mesh.x_ref
-                    .extend_from_slice(&[centre[0] + r * c, centre[1] + r * s]);
-                mesh.fixed.push(false);
+                x_ref.extend_from_slice(&[centre[0] + r * c, centre[1] + r * s]);
+                fixed.push(false);
             }
         }
         let vid = |k: usize, j: usize| base + k * n + j % n;
@@ -170,30 +179,26 @@ impl RingSolid {
         for k in 0..l {
             for j in 0..n {
                 let (a, b, c, d) = (vid(k, j), vid(k, j + 1), vid(k + 1, j + 1), vid(k + 1, j));
-                tris.push([a, c, b]);
-                tris.push([a, d, c]);
+                tris.push([a, c, b, 0]);
+                tris.push([a, d, c, 0]);
             }
         }
-        let body = mesh.bodies.len();
-        let e0 = mesh.edges.len();
+        let mut edges = Vec::with_capacity(2 * n);
         for k in [0, l] {
             for j in 0..n {
-                mesh.edges.push([vid(k, j), vid(k, j + 1)]);
-                mesh.edge_body.push(body);
+                edges.push([vid(k, j), vid(k, j + 1)]);
             }
         }
-        let t0 = mesh.triangles.len();
-        mesh.triangles.extend_from_slice(&tris);
-        mesh.bodies.push(Body {
+        BodyPart {
             name: name.into(),
             kind: BodyKind::Solid,
-            h: self.mesh_size(),
             vertices: (base..base + (l + 1) * n).collect(),
-            edges: (e0..mesh.edges.len()).collect(),
-            triangles: (t0..mesh.triangles.len()).collect(),
-            ..Default::default()
-        });
-        tris
+            elements: tris,
+            arity: 3,
+            h: Some(self.mesh_size()),
+            edges: Some(edges),
+            faces: None,
+        }
     }
 
     /// The largest reference edge: the outer circumferential edge `2R sin(π/n)` or a cell
@@ -250,8 +255,8 @@ impl Default for DropParams {
 
 /// Builds `drop`: body 0 the ring (centre `(0, radius + height)`), body 1 the floor (the
 /// fixed polyline `y = 0`, `|x| ≤ floor_half_width`). Default Δt = 0.02, 300 steps (6 s: with
-/// the default ring the kinetic energy has decayed to ~1e-8 of the initial potential energy,
-/// see DYNAMICS_NOTES.md).
+/// the default ring the kinetic energy has decayed to ~1e-8 of the initial potential energy;
+/// docs/measurements.md).
 pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
     const S: &str = "drop";
     p.ring.validate(S)?;
@@ -278,33 +283,33 @@ pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
             reason: "must exceed eps so that the start is admissible",
         });
     }
-    let mut mesh = Mesh {
-        dim: 2,
-        ..Default::default()
-    };
-    let tris = p
-        .ring
-        .append(&mut mesh, "ring", [0.0, p.ring.radius + p.height], 0.0);
-    let base = mesh.nv();
+    let (mut x_ref, mut fixed) = (Vec::new(), Vec::new());
+    let ring = p.ring.append(
+        &mut x_ref,
+        &mut fixed,
+        "ring",
+        [0.0, p.ring.radius + p.height],
+        0.0,
+    );
+    let tris = triangles(&ring);
+    let base = fixed.len();
     let nf = p.floor_edges;
     for i in 0..=nf {
         let x = -p.floor_half_width + 2.0 * p.floor_half_width * i as f64 / nf as f64;
-        mesh.x_ref.extend_from_slice(&[x, 0.0]);
-        mesh.fixed.push(true);
+        x_ref.extend_from_slice(&[x, 0.0]);
+        fixed.push(true);
     }
-    let e0 = mesh.edges.len();
-    for i in 0..nf {
-        mesh.edges.push([base + i, base + i + 1]);
-        mesh.edge_body.push(1);
-    }
-    mesh.bodies.push(Body {
+    let floor = BodyPart {
         name: "floor".into(),
         kind: BodyKind::Curve,
-        h: 2.0 * p.floor_half_width / nf as f64,
         vertices: (base..=base + nf).collect(),
-        edges: (e0..mesh.edges.len()).collect(),
-        ..Default::default()
-    });
+        elements: (0..nf).map(|i| [base + i, base + i + 1, 0, 0]).collect(),
+        arity: 2,
+        h: Some(2.0 * p.floor_half_width / nf as f64),
+        edges: None,
+        faces: None,
+    };
+    let mesh = assemble_mesh(2, x_ref, fixed, &[ring, floor], &file_order(2));
     mesh.validate()?;
     let density = vec![p.density, 0.0];
     let mass = crate::solve::dynamics::lumped_mass(&mesh, &mesh.x_ref, &density)
@@ -406,14 +411,18 @@ pub fn collide(p: &CollideParams) -> Result<DynamicScene, DynamicSceneError> {
             reason: "must exceed eps so that the start is admissible",
         });
     }
-    let mut mesh = Mesh {
-        dim: 2,
-        ..Default::default()
-    };
+    let (mut x_ref, mut fixed) = (Vec::new(), Vec::new());
     let c = p.ring.radius + 0.5 * p.gap;
-    let mut tris = p.ring.append(&mut mesh, "left", [-c, 0.0], 0.0);
-    let nv_ring = mesh.nv();
-    tris.extend(p.ring.append(&mut mesh, "right", [c, 0.0], p.offset_cells));
+    let left = p
+        .ring
+        .append(&mut x_ref, &mut fixed, "left", [-c, 0.0], 0.0);
+    let nv_ring = fixed.len();
+    let right = p
+        .ring
+        .append(&mut x_ref, &mut fixed, "right", [c, 0.0], p.offset_cells);
+    let mut tris = triangles(&left);
+    tris.extend(triangles(&right));
+    let mesh = assemble_mesh(2, x_ref, fixed, &[left, right], &file_order(2));
     mesh.validate()?;
     let x0 = mesh.x_ref.clone();
     let mut v0 = vec![0.0; x0.len()];
@@ -582,47 +591,26 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
         fixed.push(false);
     }
     let stris: Vec<[usize; 3]> = stris.iter().map(|t| t.map(|v| v + no)).collect();
-    let oedges = super::sheets::unique_edges(&otris);
-    let sedges = super::sheets::unique_edges(&stris);
-    let (nto, neo) = (otris.len(), oedges.len());
-    let triangles: Vec<[usize; 3]> = otris.iter().chain(&stris).copied().collect();
-    let edges: Vec<[usize; 2]> = oedges.iter().chain(&sedges).copied().collect();
-    let nt = triangles.len();
-    let ne = edges.len();
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x.clone(),
-        fixed,
-        edge_body: (0..ne).map(|e| usize::from(e >= neo)).collect(),
-        edges,
-        faces: triangles.clone(),
-        face_body: (0..nt).map(|t| usize::from(t >= nto)).collect(),
-        triangles,
-        tets: vec![],
-        contact_filter: None,
-        bodies: vec![
-            Body {
-                name: "obstacle".into(),
-                kind: BodyKind::Surface,
-                h: 2.0 * std::f64::consts::SQRT_2 * p.obstacle_half_size / 4.0,
-                vertices: (0..no).collect(),
-                edges: (0..neo).collect(),
-                triangles: (0..nto).collect(),
-                faces: (0..nto).collect(),
-                tets: vec![],
-            },
-            Body {
-                name: "sheet".into(),
-                kind: BodyKind::Surface,
-                h,
-                vertices: (no..no + ns).collect(),
-                edges: (neo..ne).collect(),
-                triangles: (nto..nt).collect(),
-                faces: (nto..nt).collect(),
-                tets: vec![],
-            },
-        ],
+    let surface = |name: &str, vertices: std::ops::Range<usize>, tris: &[[usize; 3]], h| BodyPart {
+        name: name.into(),
+        kind: BodyKind::Surface,
+        vertices: vertices.collect(),
+        elements: tris.iter().map(|t| [t[0], t[1], t[2], 0]).collect(),
+        arity: 3,
+        h: Some(h),
+        edges: None,
+        faces: None,
     };
+    let parts = [
+        surface(
+            "obstacle",
+            0..no,
+            &otris,
+            2.0 * std::f64::consts::SQRT_2 * p.obstacle_half_size / 4.0,
+        ),
+        surface("sheet", no..no + ns, &stris, h),
+    ];
+    let mesh = assemble_mesh(3, x.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let density = vec![0.0, p.density];
     let mut gravity = Gravity3d::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
@@ -648,6 +636,196 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
         dt: 0.005,
         steps: 80,
     })
+}
+
+/// The smallest level in `start..=400` whose dynamic scene has a mesh size at most `h`.
+fn dynamic_level(
+    s: &dyn BuiltinScene,
+    start: usize,
+    h: f64,
+    params: &Params,
+) -> anyhow::Result<usize> {
+    for n in start..=400 {
+        if s.dynamic(Some(n), None, params)?.0.scene.h <= h {
+            return Ok(n);
+        }
+    }
+    anyhow::bail!("h = {h} needs a level above the scene's n ≤ 400")
+}
+
+/// `drop` in the scene registry (dynamic only): parameters the fields of [`DropParams`] and
+/// its ring's (`layers`, `floor_edges` non-negative integers); level `n` the ring's cells
+/// around.
+pub struct Drop;
+
+impl BuiltinScene for Drop {
+    fn name(&self) -> &'static str {
+        "drop"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 8, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = DropParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.ring.n = n;
+        }
+        let mut layers = p.ring.layers as f64;
+        let mut floor_edges = p.floor_edges as f64;
+        set_fields(
+            "drop",
+            &mut (&mut p, &mut layers, &mut floor_edges),
+            params,
+            &[
+                ("mu", |p| &mut p.0.ring.mu),
+                ("lambda", |p| &mut p.0.ring.lambda),
+                ("radius", |p| &mut p.0.ring.radius),
+                ("inner", |p| &mut p.0.ring.inner),
+                ("layers", |p| &mut *p.1),
+                ("density", |p| &mut p.0.density),
+                ("g", |p| &mut p.0.g),
+                ("height", |p| &mut p.0.height),
+                ("floor_half_width", |p| &mut p.0.floor_half_width),
+                ("floor_edges", |p| &mut *p.2),
+            ],
+            &[],
+        )?;
+        p.ring.layers = count("drop", "layers", layers)?;
+        p.floor_edges = count("drop", "floor_edges", floor_edges)?;
+        Ok((drop(&p)?, serde_json::to_value(&p)?))
+    }
+}
+
+/// `collide` in the scene registry (dynamic only): parameters the fields of
+/// [`CollideParams`] and its rings' (`layers` a non-negative integer); level `n` the rings'
+/// cells around.
+pub struct Collide;
+
+impl BuiltinScene for Collide {
+    fn name(&self) -> &'static str {
+        "collide"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 8, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = CollideParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.ring.n = n;
+        }
+        let mut layers = p.ring.layers as f64;
+        set_fields(
+            "collide",
+            &mut (&mut p, &mut layers),
+            params,
+            &[
+                ("mu", |p| &mut p.0.ring.mu),
+                ("lambda", |p| &mut p.0.ring.lambda),
+                ("radius", |p| &mut p.0.ring.radius),
+                ("inner", |p| &mut p.0.ring.inner),
+                ("layers", |p| &mut *p.1),
+                ("density", |p| &mut p.0.density),
+                ("density_ratio", |p| &mut p.0.density_ratio),
+                ("gap", |p| &mut p.0.gap),
+                ("speed", |p| &mut p.0.speed),
+                ("offset_cells", |p| &mut p.0.offset_cells),
+            ],
+            &[],
+        )?;
+        p.ring.layers = count("collide", "layers", layers)?;
+        Ok((collide(&p)?, serde_json::to_value(&p)?))
+    }
+}
+
+/// `drop3d` in the scene registry (dynamic only): parameters the fields of [`Drop3dParams`];
+/// level `n` its own.
+pub struct Drop3d;
+
+impl BuiltinScene for Drop3d {
+    fn name(&self) -> &'static str {
+        "drop3d"
+    }
+
+    fn dynamic_only(&self) -> bool {
+        true
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(self.dynamic(Some(n), eps, params)?.0.scene)
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        dynamic_level(self, 1, h, params)
+    }
+
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<(DynamicScene, serde_json::Value)> {
+        let mut p = Drop3dParams {
+            eps,
+            ..Default::default()
+        };
+        if let Some(n) = n {
+            p.n = n;
+        }
+        set_fields(
+            "drop3d",
+            &mut p,
+            params,
+            &[
+                ("half_size", |p| &mut p.half_size),
+                ("angle_deg", |p| &mut p.angle_deg),
+                ("tilt_deg", |p| &mut p.tilt_deg),
+                ("height", |p| &mut p.height),
+                ("obstacle_half_size", |p| &mut p.obstacle_half_size),
+                ("mu", |p| &mut p.mu),
+                ("lambda", |p| &mut p.lambda),
+                ("density", |p| &mut p.density),
+                ("g", |p| &mut p.g),
+            ],
+            &[],
+        )?;
+        Ok((drop3d(&p)?, serde_json::to_value(&p)?))
+    }
 }
 
 #[cfg(test)]

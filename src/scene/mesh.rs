@@ -122,7 +122,7 @@ pub struct Mesh {
     pub tets: Vec<[usize; 4]>,
     /// Bodies.
     pub bodies: Vec<Body>,
-    /// Which bodies may touch which (SPEC §2, "Only what the scene requires"). `None`: every
+    /// Which bodies may touch which (docs/scene-files.md, `[contact]`). `None`: every
     /// body may touch every body and itself (the paper's setting, and the default). Pairs the
     /// filter excludes are never searched, never given rows and never checked.
     pub contact_filter: Option<ContactFilter>,

@@ -1,35 +1,162 @@
-//! The scene registry: every built-in scene by name, built from `n` (its mesh level), ε and
-//! numeric parameters (`--param NAME=VALUE`, sweep `params`), with its default level, the level
-//! for a mesh size h, and its parameters as JSON. Static scenes ([`SCENES`]) and dynamic ones
-//! ([`DYNAMIC_SCENES`]; a static scene also runs dynamically, wrapped).
+//! The scene registry: every built-in scene is one value of a type implementing
+//! [`BuiltinScene`], and [`SCENES`] lists them all, static and dynamic alike. A scene is built
+//! from `n` (its mesh level), ε and numeric parameters (`--param NAME=VALUE`, sweep `params`);
+//! it knows its default level, the level for a mesh size h, its parameters as JSON
+//! (summary.json), possibly a classification of an end state, and how it runs dynamically
+//! (§6 of the paper; docs/scenes.md): a dynamic scene (`drop`, `collide`, `drop3d`) builds its
+//! own densities, velocities, Δt and steps, a static scene runs wrapped with density 1 per
+//! body, zero velocity and no default Δt or steps.
+//!
+//! The free functions ([`build_scene`], [`build_dynamic_scene`], [`default_n`], [`n_for_h`],
+//! [`params_json`], …) are lookups by name over [`SCENES`]. Where to add a scene: see the
+//! module documentation of [`crate::scene`].
 
-use crate::scene::balloons::{self, BalloonsParams};
-use crate::scene::balloons3d::{self, Balloons3dParams};
-use crate::scene::dynamic::{self, CollideParams, Drop3dParams, DropParams, DynamicScene};
-use crate::scene::ring::{self, RingParams};
-use crate::scene::rod::{self, RodParams};
-use crate::scene::sheets::{self, SheetsParams};
-use crate::scene::solids::{self, SolidsParams};
+use crate::scene::dynamic::DynamicScene;
+use crate::scene::mesh::Mesh;
 use crate::scene::Scene;
 use anyhow::{bail, Result};
 use std::collections::BTreeMap;
 
-/// Scenes `contactlab run` and sweeps know: 2D `balloons`, `ring`; 3D `sheets`, `rod`,
-/// `solids`, `balloons3d`.
-pub const SCENES: [&str; 6] = ["balloons", "ring", "sheets", "rod", "solids", "balloons3d"];
+/// Numeric scene parameters by name (`--param NAME=VALUE`, a sweep block's `params`).
+pub type Params = BTreeMap<String, f64>;
 
-/// Sets the fields of a 3D scene's parameters from `NAME=VALUE` pairs: `fields` lists the
+/// One built-in scene: its name, parameters, build, mesh levels, and optional dynamics.
+pub trait BuiltinScene: Sync {
+    /// The scene's name (`contactlab run NAME`, sweep `scene = "NAME"`).
+    fn name(&self) -> &'static str;
+
+    /// True for a scene that only runs dynamically (`--dynamic`); a static run of it is
+    /// refused. Default: false (a static scene, which also runs dynamically, wrapped).
+    fn dynamic_only(&self) -> bool {
+        false
+    }
+
+    /// The default mesh level for `contactlab run` (default: 40).
+    fn default_n(&self) -> usize {
+        40
+    }
+
+    /// Builds the static scene at level `n` with ε (`None`: the scene's default) and numeric
+    /// parameters; unknown parameter names are errors naming them.
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> Result<Scene>;
+
+    /// The full parameter set the scene is built with, for summary.json; `None` where the
+    /// run records its own (the 2D static scenes).
+    fn params_json(
+        &self,
+        _n: usize,
+        _eps: Option<f64>,
+        _params: &Params,
+    ) -> Result<Option<serde_json::Value>> {
+        Ok(None)
+    }
+
+    /// The coarsest level whose mesh size is at most `h` (`h` is finite and > 0).
+    fn n_for_h(&self, h: f64, params: &Params) -> Result<usize>;
+
+    /// The state an end configuration `x` reached, where the scene names its states (the
+    /// balloons' pattern, the ring's self-contact); `pattern` lists the touching body pairs.
+    /// `None`: the generic contact state of the harness.
+    fn classify_state(
+        &self,
+        _mesh: &Mesh,
+        _x: &[f64],
+        _eps: f64,
+        _pattern: &[(usize, usize)],
+    ) -> Option<String> {
+        None
+    }
+
+    /// The scene for a dynamic run at level `n` (`None`: the default level) and its full
+    /// parameter set as JSON. Default: the static scene wrapped with density 1 per body and
+    /// zero velocity (Δt and steps 0, which [`crate::solve::dynamics::DynamicSettings`]
+    /// refuses, so a run must give them), its JSON the scene's parameters or
+    /// `{n, eps, params}`.
+    fn dynamic(
+        &self,
+        n: Option<usize>,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> Result<(DynamicScene, serde_json::Value)> {
+        let n = n.unwrap_or_else(|| self.default_n());
+        let scene = self.build(n, eps, params)?;
+        let density = vec![1.0; scene.mesh.bodies.len()];
+        let v0 = vec![0.0; scene.x0.len()];
+        let json = match self.params_json(n, eps, params)? {
+            Some(j) => j,
+            None => serde_json::json!({ "n": n, "eps": eps, "params": params }),
+        };
+        Ok((
+            DynamicScene {
+                scene,
+                density,
+                v0,
+                dt: 0.0,
+                steps: 0,
+            },
+            json,
+        ))
+    }
+}
+
+/// Every built-in scene: 2D `balloons`, `ring`; 3D `sheets`, `rod`, `solids`, `balloons3d`;
+/// dynamic only: 2D `drop`, `collide`, 3D `drop3d`. The order is the order of the error
+/// messages' lists.
+pub static SCENES: &[&dyn BuiltinScene] = &[
+    &crate::scene::balloons::Balloons,
+    &crate::scene::ring::Ring,
+    &crate::scene::sheets::Sheets,
+    &crate::scene::rod::Rod,
+    &crate::scene::solids::Solids,
+    &crate::scene::balloons3d::Balloons3d,
+    &crate::scene::dynamic::Drop,
+    &crate::scene::dynamic::Collide,
+    &crate::scene::dynamic::Drop3d,
+];
+
+/// The scene named `name`, static or dynamic.
+pub fn scene(name: &str) -> Option<&'static dyn BuiltinScene> {
+    SCENES.iter().copied().find(|s| s.name() == name)
+}
+
+/// The static scenes (those a static run accepts).
+fn static_scene(name: &str) -> Option<&'static dyn BuiltinScene> {
+    scene(name).filter(|s| !s.dynamic_only())
+}
+
+/// The names of the static scenes (`balloons, ring, …`), or of the dynamic-only ones.
+pub fn names(dynamic_only: bool) -> Vec<&'static str> {
+    SCENES
+        .iter()
+        .filter(|s| s.dynamic_only() == dynamic_only)
+        .map(|s| s.name())
+        .collect()
+}
+
+/// True when `name` is a dynamic-only scene (`drop`, `collide`, `drop3d`).
+pub fn is_dynamic_only(name: &str) -> bool {
+    scene(name).is_some_and(|s| s.dynamic_only())
+}
+
+fn unknown_static(name: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "unknown scene {name:?} (available: {})",
+        names(false).join(", ")
+    )
+}
+
+/// A named numeric field of a parameter struct.
+pub type Field<P> = (&'static str, fn(&mut P) -> &mut f64);
+/// A named boolean field of a parameter struct.
+pub type Flag<P> = (&'static str, fn(&mut P) -> &mut bool);
+
+/// Sets the fields of a scene's parameters from `NAME=VALUE` pairs: `fields` lists the
 /// numeric fields by name, `flags` the boolean ones (value 0 or 1). Unknown names and
 /// non-0/1 flags are errors naming them.
-/// A named numeric field of a parameter struct.
-type Field<P> = (&'static str, fn(&mut P) -> &mut f64);
-/// A named boolean field of a parameter struct.
-type Flag<P> = (&'static str, fn(&mut P) -> &mut bool);
-
-fn set_fields<P>(
+pub fn set_fields<P>(
     scene: &str,
     p: &mut P,
-    params: &BTreeMap<String, f64>,
+    params: &Params,
     fields: &[Field<P>],
     flags: &[Flag<P>],
 ) -> Result<()> {
@@ -57,273 +184,81 @@ fn set_fields<P>(
     Ok(())
 }
 
-fn sheets_params(
-    n: usize,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<SheetsParams> {
-    let mut p = SheetsParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "sheets",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("weight", |p| &mut p.weight),
-            ("gap", |p| &mut p.gap),
-            ("half_size", |p| &mut p.half_size),
-            ("angle_deg", |p| &mut p.angle_deg),
-            ("stretch_lower", |p| &mut p.stretch_lower),
-            ("stretch_upper", |p| &mut p.stretch_upper),
-        ],
-        &[("lower_fixed", |p| &mut p.lower_fixed)],
-    )?;
-    Ok(p)
-}
-
-fn rod_params(n: usize, eps: Option<f64>, params: &BTreeMap<String, f64>) -> Result<RodParams> {
-    let mut p = RodParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "rod",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("weight", |p| &mut p.weight),
-            ("height", |p| &mut p.height),
-            ("stretch", |p| &mut p.stretch),
-            ("slack", |p| &mut p.slack),
-            ("swing_deg", |p| &mut p.swing_deg),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
-fn solids_params(
-    n: usize,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<SolidsParams> {
-    let mut p = SolidsParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "solids",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("angle_deg", |p| &mut p.angle_deg),
-            ("upper_size", |p| &mut p.upper_size),
-            ("overlap", |p| &mut p.overlap),
-            ("gap", |p| &mut p.gap),
-            ("contrast", |p| &mut p.contrast),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
-fn balloons3d_params(
-    n: usize,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<Balloons3dParams> {
-    let mut p = Balloons3dParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "balloons3d",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("c", |p| &mut p.c),
-            ("radius", |p| &mut p.radius),
-            ("pad_gap", |p| &mut p.pad_gap),
-            ("twist_deg", |p| &mut p.twist_deg),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
-/// Builds scene `name` at mesh level `n` with ε (`None`: the scene's default, h/10) and numeric
-/// parameters. Unknown scene or parameter names are errors naming them.
-pub fn build_scene(
-    name: &str,
-    n: usize,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<Scene> {
-    match name {
-        "balloons" => {
-            let mut p = BalloonsParams {
-                n,
-                eps,
-                ..Default::default()
-            };
-            for (k, &v) in params {
-                match k.as_str() {
-                    "c" => p.c = v,
-                    "mu" => p.mu = v,
-                    "perturb0" => p.perturb[0] = v,
-                    "perturb1" => p.perturb[1] = v,
-                    "perturb2" => p.perturb[2] = v,
-                    "perturb3" => p.perturb[3] = v,
-                    other => bail!(
-                        "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3)"
-                    ),
-                }
-            }
-            Ok(balloons::build(&p)?)
-        }
-        "ring" => {
-            let mut p = RingParams {
-                n,
-                eps,
-                ..Default::default()
-            };
-            for (k, &v) in params {
-                match k.as_str() {
-                    "mu" => p.mu = v,
-                    "p" => p.p = v,
-                    "aspect" => p.aspect = v,
-                    "half_span" => p.half_span = v,
-                    other => bail!(
-                        "scene ring: unknown parameter {other:?} (known: mu, p, aspect, half_span)"
-                    ),
-                }
-            }
-            Ok(ring::build(&p)?)
-        }
-        "sheets" => Ok(sheets::build(&sheets_params(n, eps, params)?)?),
-        "rod" => Ok(rod::build(&rod_params(n, eps, params)?)?),
-        "solids" => Ok(solids::build(&solids_params(n, eps, params)?)?),
-        "balloons3d" => Ok(balloons3d::build(&balloons3d_params(n, eps, params)?)?),
-        other => bail!("unknown scene {other:?} (available: {})", SCENES.join(", ")),
+/// A non-negative integer parameter given as a number.
+pub fn count(scene: &str, name: &str, v: f64) -> Result<usize> {
+    if v >= 0.0 && v.fract() == 0.0 && v <= 1e9 {
+        Ok(v as usize)
+    } else {
+        bail!("scene {scene}: parameter {name:?} = {v} must be a non-negative integer")
     }
-}
-
-/// The default mesh level of scene `name` for `contactlab run` (40 for the 2D scenes, the
-/// scene's own default in 3D).
-pub fn default_n(name: &str) -> usize {
-    match name {
-        "sheets" => SheetsParams::default().n,
-        "rod" => RodParams::default().n,
-        "solids" => SolidsParams::default().n,
-        "balloons3d" => Balloons3dParams::default().n,
-        _ => 40,
-    }
-}
-
-/// The full parameter set of a 3D scene built by [`build_scene`] (for summary.json), or
-/// `None` for the 2D scenes (whose runs record their own).
-pub fn params_json(
-    name: &str,
-    n: usize,
-    eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
-) -> Result<Option<serde_json::Value>> {
-    Ok(Some(match name {
-        "sheets" => serde_json::to_value(sheets_params(n, eps, params)?)?,
-        "rod" => serde_json::to_value(rod_params(n, eps, params)?)?,
-        "solids" => serde_json::to_value(solids_params(n, eps, params)?)?,
-        "balloons3d" => serde_json::to_value(balloons3d_params(n, eps, params)?)?,
-        _ => return Ok(None),
-    }))
 }
 
 /// The smallest `n` in `1..=max_n` with `size(n) ≤ h` (the sizes decrease with n).
-fn first_level(h: f64, max_n: usize, size: impl Fn(usize) -> f64) -> Result<usize> {
+pub fn first_level(h: f64, max_n: usize, size: impl Fn(usize) -> f64) -> Result<usize> {
     (1..=max_n)
         .find(|&n| size(n) <= h)
         .ok_or_else(|| anyhow::anyhow!("h = {h} needs a level above the scene's n ≤ {max_n}"))
 }
 
-/// The coarsest mesh level `n` of scene `name` (with parameters `params`, which the 3D
-/// scenes' mesh sizes depend on) whose mesh size is at most `h`: balloons `h = 1.6/n`, so
-/// `n = ⌈1.6/h⌉`; ring `h = 2 sin(π/n)` with n even, so the smallest even
-/// `n ≥ π / asin(h/2)` (at least 6); the 3D scenes: the smallest level whose `mesh_size` is
-/// at most `h`.
-pub fn n_for_h(name: &str, h: f64, params: &BTreeMap<String, f64>) -> Result<usize> {
+/// Builds static scene `name` at mesh level `n` with ε (`None`: the scene's default, h/10)
+/// and numeric parameters. Unknown scene or parameter names are errors naming them.
+pub fn build_scene(name: &str, n: usize, eps: Option<f64>, params: &Params) -> Result<Scene> {
+    static_scene(name)
+        .ok_or_else(|| unknown_static(name))?
+        .build(n, eps, params)
+}
+
+/// The default mesh level of scene `name` for `contactlab run` (40 for the 2D scenes, the
+/// scene's own default in 3D).
+pub fn default_n(name: &str) -> usize {
+    scene(name).map_or(40, |s| s.default_n())
+}
+
+/// The full parameter set of a static scene built by [`build_scene`] (for summary.json), or
+/// `None` for the 2D scenes (whose runs record their own) and unknown names.
+pub fn params_json(
+    name: &str,
+    n: usize,
+    eps: Option<f64>,
+    params: &Params,
+) -> Result<Option<serde_json::Value>> {
+    match static_scene(name) {
+        Some(s) => s.params_json(n, eps, params),
+        None => Ok(None),
+    }
+}
+
+/// The coarsest mesh level `n` of static scene `name` (with parameters `params`, which the
+/// 3D scenes' mesh sizes depend on) whose mesh size is at most `h` (each scene's
+/// [`BuiltinScene::n_for_h`]).
+pub fn n_for_h(name: &str, h: f64, params: &Params) -> Result<usize> {
     if !(h.is_finite() && h > 0.0) {
         bail!("h = {h}: a mesh size must be finite and > 0");
     }
-    let n = match name {
-        "balloons" => {
-            let mut n = (1.6 / h).ceil().max(1.0) as usize;
-            // guard the rounding of 1.6/h
-            while n > 1 && 1.6 / ((n - 1) as f64) <= h {
-                n -= 1;
-            }
-            n
-        }
-        "ring" => {
-            if h >= 2.0 {
-                6
-            } else {
-                let mut n = ((std::f64::consts::PI / (h / 2.0).asin()).ceil() as usize).max(6);
-                n += n % 2;
-                while n > 6 && ring::mesh_size(n - 2) <= h {
-                    n -= 2;
-                }
-                while ring::mesh_size(n) > h {
-                    n += 2;
-                }
-                n
-            }
-        }
-        "sheets" => {
-            let base = sheets_params(1, None, params)?;
-            first_level(h, 1000, |n| {
-                sheets::mesh_size(&SheetsParams { n, ..base.clone() })
-            })?
-        }
-        "rod" => {
-            let base = rod_params(1, None, params)?;
-            first_level(h, 100_000, |n| {
-                rod::mesh_size(&RodParams { n, ..base.clone() })
-            })?
-        }
-        "solids" => {
-            let base = solids_params(1, None, params)?;
-            first_level(h, 200, |n| {
-                solids::mesh_size(&SolidsParams { n, ..base.clone() })
-            })?
-        }
-        "balloons3d" => {
-            let base = balloons3d_params(1, None, params)?;
-            first_level(h, 7, |n| {
-                balloons3d::mesh_size(&Balloons3dParams { n, ..base.clone() })
-            })?
-        }
-        other => bail!("unknown scene {other:?} (available: {})", SCENES.join(", ")),
-    };
+    let n = static_scene(name)
+        .ok_or_else(|| unknown_static(name))?
+        .n_for_h(h, params)?;
     if n > 10_000_000 {
         bail!("h = {h} needs n = {n} elements: too fine");
     }
     Ok(n)
 }
 
+/// The state an end configuration reached, where scene `name` names its states (see
+/// [`BuiltinScene::classify_state`]); a scene file named like a built-in scene is classified
+/// as that scene.
+pub fn classify_state(
+    name: &str,
+    mesh: &Mesh,
+    x: &[f64],
+    eps: f64,
+    pattern: &[(usize, usize)],
+) -> Option<String> {
+    static_scene(name)?.classify_state(mesh, x, eps, pattern)
+}
+
 /// Parses `NAME=VALUE` scene parameters (`--param`, repeatable); the error names the argument.
-pub fn parse_params(args: &[String]) -> Result<BTreeMap<String, f64>> {
+pub fn parse_params(args: &[String]) -> Result<Params> {
     let mut params = BTreeMap::new();
     for p in args {
         let Some((k, v)) = p.split_once('=') else {
@@ -337,176 +272,46 @@ pub fn parse_params(args: &[String]) -> Result<BTreeMap<String, f64>> {
     Ok(params)
 }
 
-/// The dynamic scenes (§6; `contactlab run NAME --dynamic`): 2D `drop`, `collide`; 3D
-/// `drop3d`. The static scenes of [`SCENES`] also run with `--dynamic`, with density 1 per
-/// body, zero initial velocity and no default Δt or number of steps.
-pub const DYNAMIC_SCENES: [&str; 3] = ["drop", "collide", "drop3d"];
-
 /// A dynamic scene by name: the dynamic scenes with their parameters (`--param`), or a static
-/// scene of [`SCENES`] wrapped with density 1 per body and zero velocity (its Δt and steps
-/// then have no default: 0 and 0, which [`DynamicSettings::validate`] refuses).
+/// scene wrapped with density 1 per body and zero velocity (its Δt and steps then have no
+/// default: 0 and 0, which the dynamic settings refuse).
 pub fn build_dynamic_scene(
     name: &str,
     n: Option<usize>,
     eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
+    params: &Params,
 ) -> Result<DynamicScene> {
     Ok(build_dynamic_scene_json(name, n, eps, params)?.0)
 }
 
 /// [`build_dynamic_scene`], and the scene's full parameter set as JSON (summary.json): the
-/// dynamic scenes' parameter structs, or `{n, eps, params}` for a wrapped static scene.
+/// dynamic scenes' parameter structs, or the static scene's ([`BuiltinScene::dynamic`]).
 pub fn build_dynamic_scene_json(
     name: &str,
     n: Option<usize>,
     eps: Option<f64>,
-    params: &BTreeMap<String, f64>,
+    params: &Params,
 ) -> Result<(DynamicScene, serde_json::Value)> {
-    match name {
-        "drop" => {
-            let mut p = DropParams {
-                eps,
-                ..Default::default()
-            };
-            if let Some(n) = n {
-                p.ring.n = n;
-            }
-            let mut layers = p.ring.layers as f64;
-            let mut floor_edges = p.floor_edges as f64;
-            set_fields(
-                "drop",
-                &mut (&mut p, &mut layers, &mut floor_edges),
-                params,
-                &[
-                    ("mu", |p| &mut p.0.ring.mu),
-                    ("lambda", |p| &mut p.0.ring.lambda),
-                    ("radius", |p| &mut p.0.ring.radius),
-                    ("inner", |p| &mut p.0.ring.inner),
-                    ("layers", |p| &mut *p.1),
-                    ("density", |p| &mut p.0.density),
-                    ("g", |p| &mut p.0.g),
-                    ("height", |p| &mut p.0.height),
-                    ("floor_half_width", |p| &mut p.0.floor_half_width),
-                    ("floor_edges", |p| &mut *p.2),
-                ],
-                &[],
-            )?;
-            p.ring.layers = count("drop", "layers", layers)?;
-            p.floor_edges = count("drop", "floor_edges", floor_edges)?;
-            Ok((dynamic::drop(&p)?, serde_json::to_value(&p)?))
-        }
-        "collide" => {
-            let mut p = CollideParams {
-                eps,
-                ..Default::default()
-            };
-            if let Some(n) = n {
-                p.ring.n = n;
-            }
-            let mut layers = p.ring.layers as f64;
-            set_fields(
-                "collide",
-                &mut (&mut p, &mut layers),
-                params,
-                &[
-                    ("mu", |p| &mut p.0.ring.mu),
-                    ("lambda", |p| &mut p.0.ring.lambda),
-                    ("radius", |p| &mut p.0.ring.radius),
-                    ("inner", |p| &mut p.0.ring.inner),
-                    ("layers", |p| &mut *p.1),
-                    ("density", |p| &mut p.0.density),
-                    ("density_ratio", |p| &mut p.0.density_ratio),
-                    ("gap", |p| &mut p.0.gap),
-                    ("speed", |p| &mut p.0.speed),
-                    ("offset_cells", |p| &mut p.0.offset_cells),
-                ],
-                &[],
-            )?;
-            p.ring.layers = count("collide", "layers", layers)?;
-            Ok((dynamic::collide(&p)?, serde_json::to_value(&p)?))
-        }
-        "drop3d" => {
-            let mut p = Drop3dParams {
-                eps,
-                ..Default::default()
-            };
-            if let Some(n) = n {
-                p.n = n;
-            }
-            set_fields(
-                "drop3d",
-                &mut p,
-                params,
-                &[
-                    ("half_size", |p| &mut p.half_size),
-                    ("angle_deg", |p| &mut p.angle_deg),
-                    ("tilt_deg", |p| &mut p.tilt_deg),
-                    ("height", |p| &mut p.height),
-                    ("obstacle_half_size", |p| &mut p.obstacle_half_size),
-                    ("mu", |p| &mut p.mu),
-                    ("lambda", |p| &mut p.lambda),
-                    ("density", |p| &mut p.density),
-                    ("g", |p| &mut p.g),
-                ],
-                &[],
-            )?;
-            Ok((dynamic::drop3d(&p)?, serde_json::to_value(&p)?))
-        }
-        other if SCENES.contains(&other) => {
-            let n = n.unwrap_or_else(|| default_n(other));
-            let scene = build_scene(other, n, eps, params)?;
-            let density = vec![1.0; scene.mesh.bodies.len()];
-            let v0 = vec![0.0; scene.x0.len()];
-            let json = match params_json(other, n, eps, params)? {
-                Some(j) => j,
-                None => serde_json::json!({ "n": n, "eps": eps, "params": params }),
-            };
-            Ok((
-                DynamicScene {
-                    scene,
-                    density,
-                    v0,
-                    dt: 0.0,
-                    steps: 0,
-                },
-                json,
-            ))
-        }
-        other => bail!(
-            "unknown scene {other:?} (dynamic: {}; static, with --dynamic: {})",
-            DYNAMIC_SCENES.join(", "),
-            SCENES.join(", ")
+    match scene(name) {
+        Some(s) => s.dynamic(n, eps, params),
+        None => bail!(
+            "unknown scene {name:?} (dynamic: {}; static, with --dynamic: {})",
+            names(true).join(", "),
+            names(false).join(", ")
         ),
     }
 }
 
-/// A non-negative integer parameter given as a number.
-fn count(scene: &str, name: &str, v: f64) -> Result<usize> {
-    if v >= 0.0 && v.fract() == 0.0 && v <= 1e9 {
-        Ok(v as usize)
-    } else {
-        bail!("scene {scene}: parameter {name:?} = {v} must be a non-negative integer")
-    }
-}
-
-/// The smallest mesh level of dynamic scene `name` whose h is at most `h` (drop, collide: the
-/// ring's cells around; drop3d: its level; the static scenes: [`n_for_h`]).
-pub fn dynamic_n_for_h(name: &str, h: f64, params: &BTreeMap<String, f64>) -> Result<usize> {
-    if !DYNAMIC_SCENES.contains(&name) {
+/// The smallest mesh level of scene `name` for a dynamic run whose h is at most `h` (the
+/// dynamic-only scenes: their [`BuiltinScene::n_for_h`]; the static scenes: [`n_for_h`]).
+pub fn dynamic_n_for_h(name: &str, h: f64, params: &Params) -> Result<usize> {
+    let Some(s) = scene(name).filter(|s| s.dynamic_only()) else {
         return n_for_h(name, h, params);
-    }
+    };
     if !(h.is_finite() && h > 0.0) {
         bail!("h = {h}: a mesh size must be finite and > 0");
     }
-    let size =
-        |n: usize| -> Result<f64> { Ok(build_dynamic_scene(name, Some(n), None, params)?.scene.h) };
-    let start = if name == "drop3d" { 1 } else { 8 };
-    for n in start..=400 {
-        if size(n)? <= h {
-            return Ok(n);
-        }
-    }
-    bail!("h = {h} needs a level above the scene's n ≤ 400")
+    s.n_for_h(h, params)
 }
 
 #[cfg(test)]
@@ -515,7 +320,7 @@ mod tests {
 
     #[test]
     fn every_scene_builds_by_name_at_its_default_level() {
-        for name in SCENES {
+        for name in names(false) {
             let s = build_scene(name, default_n(name), None, &BTreeMap::new()).unwrap();
             assert_eq!(s.name, name);
             let dim = if ["balloons", "ring"].contains(&name) {
@@ -525,6 +330,31 @@ mod tests {
             };
             assert_eq!(s.mesh.dim, dim, "{name}");
         }
+    }
+
+    #[test]
+    fn the_registry_lists_todays_scenes_in_order() {
+        assert_eq!(
+            names(false),
+            ["balloons", "ring", "sheets", "rod", "solids", "balloons3d"]
+        );
+        assert_eq!(names(true), ["drop", "collide", "drop3d"]);
+        let e = build_scene("drop", 10, None, &BTreeMap::new())
+            .err()
+            .unwrap()
+            .to_string();
+        assert_eq!(
+            e,
+            "unknown scene \"drop\" (available: balloons, ring, sheets, rod, solids, balloons3d)"
+        );
+        let e = build_dynamic_scene("nope", None, None, &BTreeMap::new())
+            .err()
+            .unwrap()
+            .to_string();
+        assert_eq!(
+            e,
+            "unknown scene \"nope\" (dynamic: drop, collide, drop3d; static, with --dynamic: balloons, ring, sheets, rod, solids, balloons3d)"
+        );
     }
 
     #[test]

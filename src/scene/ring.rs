@@ -22,8 +22,7 @@
 //! pressure pulls inward, so a ring held by one vertex has no equilibrium in tension: both the
 //! pressure and any tension shorten it, compression costs nothing, and the ring shrinks and
 //! crumples until the ε-rows of neighbouring elements stop it (measured: see the tests
-//! `tests/ring.rs` and the README of this scene in the session report). Tension needs the
-//! two ends held apart by more than the half rest perimeter `n sin(π/n)` (< π). So the
+//! `tests/ring.rs`). Tension needs the two ends held apart by more than the half rest perimeter `n sin(π/n)` (< π). So the
 //! leftmost and rightmost vertices (0 and n/2) are fixed at `(∓a, 0)` with
 //! `2a > n sin(π/n)`; the default `a = 2` stretches each flattened half by `F ≈ 4/π ≈ 1.27`.
 //! Both halves are then taut strings between the pins; the pressure presses them together
@@ -35,7 +34,9 @@
 use super::Scene;
 use crate::contact::broad_phase::{min_distance_2d, point_edge_near, NearPair};
 use crate::energy::{MembraneEnergy, PressureEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
 /// Which vertices of the ring are fixed (Dirichlet).
@@ -212,24 +213,17 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
         fixed[n / 2] = true;
     }
     let edges: Vec<[usize; 2]> = (0..n).map(|k| [k, (k + 1) % n]).collect();
-    let mesh = Mesh {
-        dim: 2,
-        x_ref: x_ref.clone(),
-        fixed,
-        edges: edges.clone(),
-        edge_body: vec![0; n],
-        triangles: vec![],
-        bodies: vec![Body {
-            name: "ring".into(),
-            kind: BodyKind::Curve,
-            h,
-            vertices: (0..n).collect(),
-            edges: (0..n).collect(),
-            triangles: vec![],
-            ..Default::default()
-        }],
-        ..Default::default()
+    let ring = BodyPart {
+        name: "ring".into(),
+        kind: BodyKind::Curve,
+        vertices: (0..n).collect(),
+        elements: edges.iter().map(|e| [e[0], e[1], 0, 0]).collect(),
+        arity: 2,
+        h: Some(h),
+        edges: None,
+        faces: None,
     };
+    let mesh = assemble_mesh(2, x_ref.clone(), fixed, &[ring], &file_order(1));
     let md = min_distance_2d(&mesh, &x0, 2.0 * eps, false);
     if md.distance < eps {
         return Err(RingError::InadmissibleStart {
@@ -292,6 +286,63 @@ pub fn classify_state(mesh: &Mesh, x: &[f64], eps: f64) -> String {
         "no_contact".into()
     } else {
         "self_contact".into()
+    }
+}
+
+/// The ring in the scene registry: parameters `mu`, `p`, `aspect`, `half_span`; level `n`
+/// vertices, `h = 2 sin(π/n)`; end states classified by [`classify_state`].
+pub struct Ring;
+
+impl BuiltinScene for Ring {
+    fn name(&self) -> &'static str {
+        "ring"
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        let mut p = RingParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        for (k, &v) in params {
+            match k.as_str() {
+                "mu" => p.mu = v,
+                "p" => p.p = v,
+                "aspect" => p.aspect = v,
+                "half_span" => p.half_span = v,
+                other => anyhow::bail!(
+                    "scene ring: unknown parameter {other:?} (known: mu, p, aspect, half_span)"
+                ),
+            }
+        }
+        Ok(build(&p)?)
+    }
+
+    /// `h = 2 sin(π/n)` with n even: the smallest even `n ≥ π / asin(h/2)` (at least 6).
+    fn n_for_h(&self, h: f64, _params: &Params) -> anyhow::Result<usize> {
+        Ok(if h >= 2.0 {
+            6
+        } else {
+            let mut n = ((std::f64::consts::PI / (h / 2.0).asin()).ceil() as usize).max(6);
+            n += n % 2;
+            while n > 6 && mesh_size(n - 2) <= h {
+                n -= 2;
+            }
+            while mesh_size(n) > h {
+                n += 2;
+            }
+            n
+        })
+    }
+
+    fn classify_state(
+        &self,
+        mesh: &Mesh,
+        x: &[f64],
+        eps: f64,
+        _pattern: &[(usize, usize)],
+    ) -> Option<String> {
+        Some(classify_state(mesh, x, eps))
     }
 }
 

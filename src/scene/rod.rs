@@ -51,7 +51,9 @@
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity3d, String3dEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
 /// Stretch of every upper-strand edge in `x0` (in tension, so the Hessian has no zero
@@ -321,26 +323,17 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
     }
     let edges: Vec<[usize; 2]> = (0..nv - 1).map(|k| [k, k + 1]).collect();
     let x0: Vec<f64> = x0.into_iter().flatten().collect();
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edge_body: vec![0; edges.len()],
-        edges: edges.clone(),
-        triangles: vec![],
-        faces: vec![],
-        face_body: vec![],
-        tets: vec![],
-        bodies: vec![Body {
-            name: "rod".into(),
-            kind: BodyKind::Curve,
-            h,
-            vertices: (0..nv).collect(),
-            edges: (0..nv - 1).collect(),
-            ..Default::default()
-        }],
-        contact_filter: None,
+    let rod = BodyPart {
+        name: "rod".into(),
+        kind: BodyKind::Curve,
+        vertices: (0..nv).collect(),
+        elements: edges.iter().map(|e| [e[0], e[1], 0, 0]).collect(),
+        arity: 2,
+        h: Some(h),
+        edges: None,
+        faces: None,
     };
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &[rod], &file_order(1));
     mesh.validate()?;
     let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
@@ -368,6 +361,64 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
         h,
         x0,
     })
+}
+
+/// The parameters of [`Rod`] at level `n` with ε, set from `NAME=VALUE` pairs.
+fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<RodParams> {
+    let mut p = RodParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "rod",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("weight", |p| &mut p.weight),
+            ("height", |p| &mut p.height),
+            ("stretch", |p| &mut p.stretch),
+            ("slack", |p| &mut p.slack),
+            ("swing_deg", |p| &mut p.swing_deg),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+/// The `rod` scene in the scene registry: its parameters are the numeric fields of
+/// [`RodParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
+pub struct Rod;
+
+impl BuiltinScene for Rod {
+    fn name(&self) -> &'static str {
+        "rod"
+    }
+
+    fn default_n(&self) -> usize {
+        RodParams::default().n
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(build(&registry_params(n, eps, params)?)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(registry_params(
+            n, eps, params,
+        )?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        let base = registry_params(1, None, params)?;
+        first_level(h, 100000, |n| mesh_size(&RodParams { n, ..base.clone() }))
+    }
 }
 
 #[cfg(test)]

@@ -51,7 +51,9 @@
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity3d, Membrane3dEnergy, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
 /// Parameters of the sheets scene.
@@ -271,42 +273,32 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     }
     let lower_tris = grid_tris.clone();
     let upper_tris: Vec<[usize; 3]> = grid_tris.iter().map(|t| t.map(|v| v + np)).collect();
-    let lower_edges = unique_edges(&lower_tris);
-    let upper_edges = unique_edges(&upper_tris);
-    let (nt, ne) = (lower_tris.len(), lower_edges.len());
-    let triangles: Vec<[usize; 3]> = lower_tris.iter().chain(&upper_tris).copied().collect();
-    let edges: Vec<[usize; 2]> = lower_edges.iter().chain(&upper_edges).copied().collect();
-    let body = |name: &str, b: usize, bh: f64| Body {
+    let sq2 = std::f64::consts::SQRT_2;
+    let part = |name: &str, b: usize, tris: &[[usize; 3]], bh: f64| BodyPart {
         name: name.into(),
         kind: BodyKind::Surface,
-        h: bh,
         vertices: (b * np..(b + 1) * np).collect(),
-        edges: (b * ne..(b + 1) * ne).collect(),
-        triangles: (b * nt..(b + 1) * nt).collect(),
-        faces: (b * nt..(b + 1) * nt).collect(),
-        tets: vec![],
+        elements: tris.iter().map(|t| [t[0], t[1], t[2], 0]).collect(),
+        arity: 3,
+        h: Some(bh),
+        edges: None,
+        faces: None,
     };
-    let sq2 = std::f64::consts::SQRT_2;
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edge_body: (0..2 * ne).map(|e| e / ne).collect(),
-        edges,
-        faces: triangles.clone(),
-        face_body: (0..2 * nt).map(|t| t / nt).collect(),
-        triangles,
-        tets: vec![],
-        bodies: vec![
-            body("lower", 0, 2.0 * sq2 / (m as f64 * p.stretch_lower)),
-            body(
-                "upper",
-                1,
-                2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
-            ),
-        ],
-        contact_filter: None,
-    };
+    let parts = [
+        part(
+            "lower",
+            0,
+            &lower_tris,
+            2.0 * sq2 / (m as f64 * p.stretch_lower),
+        ),
+        part(
+            "upper",
+            1,
+            &upper_tris,
+            2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
+        ),
+    ];
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
@@ -339,6 +331,66 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
         h,
         x0,
     })
+}
+
+/// The parameters of [`Sheets`] at level `n` with ε, set from `NAME=VALUE` pairs.
+fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SheetsParams> {
+    let mut p = SheetsParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "sheets",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("weight", |p| &mut p.weight),
+            ("gap", |p| &mut p.gap),
+            ("half_size", |p| &mut p.half_size),
+            ("angle_deg", |p| &mut p.angle_deg),
+            ("stretch_lower", |p| &mut p.stretch_lower),
+            ("stretch_upper", |p| &mut p.stretch_upper),
+        ],
+        &[("lower_fixed", |p| &mut p.lower_fixed)],
+    )?;
+    Ok(p)
+}
+
+/// The `sheets` scene in the scene registry: its parameters are the numeric fields of
+/// [`SheetsParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
+pub struct Sheets;
+
+impl BuiltinScene for Sheets {
+    fn name(&self) -> &'static str {
+        "sheets"
+    }
+
+    fn default_n(&self) -> usize {
+        SheetsParams::default().n
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(build(&registry_params(n, eps, params)?)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(registry_params(
+            n, eps, params,
+        )?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        let base = registry_params(1, None, params)?;
+        first_level(h, 1000, |n| mesh_size(&SheetsParams { n, ..base.clone() }))
+    }
 }
 
 #[cfg(test)]

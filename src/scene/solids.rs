@@ -34,11 +34,14 @@
 //! faces of the lower one and conversely) and edge–edge rows (the 20° rotation makes the
 //! edges cross) are active. The fixed bottom and top faces leave no rigid motion.
 
+#[cfg(test)]
 use super::sheets::unique_edges;
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
-use crate::scene::mesh::{Body, BodyKind, Mesh, MeshError};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use thiserror::Error;
@@ -283,35 +286,22 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         .collect();
     let lower_faces = cube_faces.clone();
     let upper_faces: Vec<[usize; 3]> = cube_faces.iter().map(|f| f.map(|v| v + np)).collect();
-    let lower_edges = unique_edges(&lower_faces);
-    let upper_edges = unique_edges(&upper_faces);
-    let (nf, ne, nt) = (lower_faces.len(), lower_edges.len(), cube_tets.len());
-    let body = |name: &str, b: usize, bh: f64| Body {
+    let nt = cube_tets.len();
+    let part = |name: &str, b: usize, faces: Vec<[usize; 3]>, bh: f64| BodyPart {
         name: name.into(),
         kind: BodyKind::Solid,
-        h: bh,
         vertices: (b * np..(b + 1) * np).collect(),
-        edges: (b * ne..(b + 1) * ne).collect(),
-        triangles: vec![],
-        faces: (b * nf..(b + 1) * nf).collect(),
-        tets: (b * nt..(b + 1) * nt).collect(),
+        elements: tets[b * nt..(b + 1) * nt].to_vec(),
+        arity: 4,
+        h: Some(bh),
+        edges: None,
+        faces: Some(faces),
     };
-    let mesh = Mesh {
-        dim: 3,
-        x_ref: x_ref.clone(),
-        fixed,
-        edges: lower_edges.iter().chain(&upper_edges).copied().collect(),
-        edge_body: (0..2 * ne).map(|e| e / ne).collect(),
-        triangles: vec![],
-        faces: lower_faces.iter().chain(&upper_faces).copied().collect(),
-        face_body: (0..2 * nf).map(|f| f / nf).collect(),
-        tets: tets.clone(),
-        bodies: vec![
-            body("lower", 0, 3f64.sqrt() / m as f64),
-            body("upper", 1, 3f64.sqrt() * s / m as f64),
-        ],
-        contact_filter: None,
-    };
+    let parts = [
+        part("lower", 0, lower_faces, 3f64.sqrt() / m as f64),
+        part("upper", 1, upper_faces, 3f64.sqrt() * s / m as f64),
+    ];
+    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
@@ -345,6 +335,65 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         h,
         x0,
     })
+}
+
+/// The parameters of [`Solids`] at level `n` with ε, set from `NAME=VALUE` pairs.
+fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SolidsParams> {
+    let mut p = SolidsParams {
+        n,
+        eps,
+        ..Default::default()
+    };
+    set_fields(
+        "solids",
+        &mut p,
+        params,
+        &[
+            ("mu", |p| &mut p.mu),
+            ("lambda", |p| &mut p.lambda),
+            ("angle_deg", |p| &mut p.angle_deg),
+            ("upper_size", |p| &mut p.upper_size),
+            ("overlap", |p| &mut p.overlap),
+            ("gap", |p| &mut p.gap),
+            ("contrast", |p| &mut p.contrast),
+        ],
+        &[],
+    )?;
+    Ok(p)
+}
+
+/// The `solids` scene in the scene registry: its parameters are the numeric fields of
+/// [`SolidsParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
+pub struct Solids;
+
+impl BuiltinScene for Solids {
+    fn name(&self) -> &'static str {
+        "solids"
+    }
+
+    fn default_n(&self) -> usize {
+        SolidsParams::default().n
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
+        Ok(build(&registry_params(n, eps, params)?)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> anyhow::Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(registry_params(
+            n, eps, params,
+        )?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
+        let base = registry_params(1, None, params)?;
+        first_level(h, 200, |n| mesh_size(&SolidsParams { n, ..base.clone() }))
+    }
 }
 
 #[cfg(test)]

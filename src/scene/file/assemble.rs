@@ -1,0 +1,620 @@
+//! Assembly of a scene file: the loaded bodies become one [`Mesh`] (vertices numbered body by
+//! body, welded vertices merged; each body's contact edges and faces) and one energy
+//! `J = Σ_bodies (material + gas + pressure) + gravity` (docs/method.md, docs/scene-files.md),
+//! then the assembled scene is checked: the contact filter, boundedness under gravity, ε
+//! against the rest shapes, the admissibility of the start, and the initial velocities.
+
+use super::contact::describe;
+use super::schema::{
+    BodySpec, ContactSpec, DynamicsSpec, GasSpec, MaterialSpec, PressureSpec, SolverSpec, WeldSpec,
+};
+use super::topology::chain;
+use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
+use crate::contact::min_distance;
+use crate::energy::{
+    Energy, Gas3dEnergy, GasEnergy, Gravity, Gravity3d, Membrane3dEnergy, MembraneEnergy,
+    NeoHookean2d, NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
+};
+use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
+use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
+use crate::scene::Scene;
+use std::path::Path;
+use toml::Spanned;
+
+/// The scene-level keys assembly needs besides the bodies (checked in `validate`).
+pub(super) struct Header {
+    /// The scene's name.
+    pub(super) name: String,
+    /// 2 or 3.
+    pub(super) dim: usize,
+    /// ε.
+    pub(super) eps: f64,
+    /// The line of `eps`.
+    pub(super) eps_line: usize,
+    /// A non-zero `gravity` and its line.
+    pub(super) gravity: Option<(Vec<f64>, usize)>,
+    /// `[contact]`.
+    pub(super) contact: Option<Spanned<ContactSpec>>,
+    /// `weld`.
+    pub(super) welds: Vec<Spanned<WeldSpec>>,
+    /// `[solver]`.
+    pub(super) solver: SolverSpec,
+    /// `[dynamics]`.
+    pub(super) dynamics: DynamicsSpec,
+}
+
+/// Gravity's accumulators while the bodies' terms are built: lumped masses (2D) and the 3D
+/// load.
+struct Loads {
+    mass: Vec<f64>,
+    gravity3: Gravity3d,
+}
+
+impl Ctx<'_> {
+    /// The scene of the loaded bodies (`specs` their `[[body]]` tables, in file order).
+    pub(super) fn assemble(
+        &self,
+        header: Header,
+        loaded: Vec<Loaded>,
+        specs: Vec<BodySpec>,
+        path: &Path,
+    ) -> Result<SceneFile, SceneFileError> {
+        let Header {
+            name,
+            dim,
+            eps,
+            eps_line,
+            gravity,
+            contact,
+            welds,
+            solver,
+            dynamics,
+        } = header;
+        let nb = loaded.len();
+        let (global, welded) = self.resolve_welds(&welds, &loaded)?;
+        let (x_ref, fixed, x0) = place_vertices(dim, &loaded, &global);
+        let parts = body_parts(&loaded, &global);
+        let mut mesh = assemble_mesh(dim, x_ref, fixed, &parts, &file_order(nb));
+        let body_elements: Vec<Vec<[usize; 4]>> = parts.into_iter().map(|p| p.elements).collect();
+        let (h, body_all_fixed) = mesh_size(&mesh);
+        let energy = self.energy_terms(
+            &mesh,
+            &x0,
+            &loaded,
+            &specs,
+            &body_elements,
+            &body_all_fixed,
+            gravity.as_ref(),
+        )?;
+
+        // contact filter
+        let names: Vec<String> = loaded.iter().map(|l| l.name.clone()).collect();
+        let allowed = self.contact_mask(contact, &names)?;
+        if allowed.iter().any(|&a| !a) {
+            mesh.contact_filter = Some(ContactFilter::new(&mesh, |i, j| allowed[i * nb + j]));
+        }
+        if let Err(e) = mesh.validate() {
+            // the per-body checks above catch every case first; kept as a safety net
+            return Err(self.invalid(1, "body", "(assembled mesh)", e.to_string()));
+        }
+        if let Some(g) = &gravity {
+            self.check_bounded(&mesh, g, &specs, &allowed, &welded, &names)?;
+        }
+        self.check_rest_shapes(&mesh, eps, eps_line, &allowed, &names)?;
+        self.check_start(&mesh, &x0, eps, &energy, &names)?;
+        let v0 = self.initial_velocities(&mesh, &loaded, &specs, &names)?;
+        Ok(SceneFile {
+            scene: Scene {
+                name,
+                mesh,
+                energy,
+                eps,
+                h,
+                x0,
+            },
+            solver,
+            dynamics,
+            path: path.to_path_buf(),
+            body_names: names,
+            densities: specs.iter().map(|s| s.density).collect(),
+            v0,
+            gravity: gravity.map(|(g, _)| g),
+            body_lines: loaded.iter().map(|l| l.line).collect(),
+        })
+    }
+
+    /// The energy terms, body by body: material, then gas, then pressure; gravity last.
+    #[allow(clippy::too_many_arguments)]
+    fn energy_terms(
+        &self,
+        mesh: &Mesh,
+        x0: &[f64],
+        loaded: &[Loaded],
+        specs: &[BodySpec],
+        body_elements: &[Vec<[usize; 4]>],
+        body_all_fixed: &[bool],
+        gravity: Option<&(Vec<f64>, usize)>,
+    ) -> Result<TotalEnergy, SceneFileError> {
+        let dim = mesh.dim;
+        let mut energy = TotalEnergy::default();
+        let mut loads = Loads {
+            mass: vec![0.0; mesh.nv()],
+            gravity3: Gravity3d::new(vec![0.0; mesh.nv()], [0.0; 3]),
+        };
+        for (bi, (l, s)) in loaded.iter().zip(specs).enumerate() {
+            let els = &body_elements[bi];
+            let all_fixed = body_all_fixed[bi];
+            match &s.material {
+                None if all_fixed => {}
+                None => {
+                    return Err(self.invalid(l.line, format!("{}.material", l.key), "(missing)", "a body with a free vertex needs a material (only a body with `fixed.all = true` may have none)"));
+                }
+                Some(m) => energy
+                    .terms
+                    .push(self.material_term(dim, l, m, els, &mesh.x_ref)?),
+            }
+            if let Some(g) = &s.gas {
+                energy.terms.push(self.gas_term(dim, l, g, els, x0)?);
+            }
+            if let Some(p) = &s.pressure {
+                energy.terms.push(self.pressure_term(dim, l, p, els, x0)?);
+            }
+            self.body_load(mesh, l, s, els, all_fixed, gravity, &mut loads)?;
+        }
+        if let Some((g, _)) = gravity {
+            if dim == 3 {
+                let mut gravity3 = loads.gravity3;
+                gravity3.g = [g[0], g[1], g[2]];
+                energy.terms.push(Box::new(gravity3));
+            } else {
+                energy
+                    .terms
+                    .push(Box::new(Gravity::new(loads.mass, [g[0], g[1]])));
+            }
+        }
+        Ok(energy)
+    }
+
+    /// A body's elastic term from its `material`: string (curves), St Venant–Kirchhoff
+    /// membrane (3D surfaces), neo-Hookean (solids).
+    fn material_term(
+        &self,
+        dim: usize,
+        l: &Loaded,
+        m: &MaterialSpec,
+        els: &[[usize; 4]],
+        x_ref: &[f64],
+    ) -> Result<Box<dyn Energy>, SceneFileError> {
+        let key = &l.key;
+        let line = l.line;
+        let mk = format!("{key}.material");
+        let expect = match (l.kind, dim) {
+            (BodyKind::Curve, _) => "string",
+            (BodyKind::Surface, _) => "stvk-membrane",
+            (BodyKind::Solid, _) => "neo-hookean",
+        };
+        if m.model != expect {
+            return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean for solids)", l.kind).to_lowercase()));
+        }
+        let mu =
+            m.mu.ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
+        if !(mu > 0.0 && mu.is_finite()) {
+            return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
+        }
+        let lambda = match (expect, m.lambda) {
+            ("string", Some(v)) => {
+                return Err(self.invalid(
+                    line,
+                    format!("{mk}.lambda"),
+                    v,
+                    "the string model has no lambda",
+                ));
+            }
+            ("string", None) => 0.0,
+            (_, None) => {
+                return Err(self.invalid(line, format!("{mk}.lambda"), "(missing)", "required"));
+            }
+            (_, Some(v)) => v,
+        };
+        if !(lambda >= 0.0 && lambda.is_finite()) {
+            return Err(self.invalid(
+                line,
+                format!("{mk}.lambda"),
+                lambda,
+                "must be finite and ≥ 0",
+            ));
+        }
+        let edges: Vec<[usize; 2]> = els.iter().map(|e| [e[0], e[1]]).collect();
+        let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
+        Ok(match (l.kind, dim) {
+            (BodyKind::Curve, 2) => Box::new(MembraneEnergy::new(edges, x_ref, mu)),
+            (BodyKind::Curve, _) => Box::new(String3dEnergy::new(edges, x_ref, mu)),
+            (BodyKind::Surface, _) => Box::new(Membrane3dEnergy::new(tris, x_ref, mu, lambda)),
+            (BodyKind::Solid, 2) => Box::new(NeoHookean2d::new(tris, x_ref, mu, lambda)),
+            (BodyKind::Solid, _) => Box::new(
+                NeoHookean3d::new(els.to_vec(), x_ref, mu, lambda).map_err(|e| {
+                    self.invalid(line, key.clone(), format!("{:?}", l.name), e.to_string())
+                })?,
+            ),
+        })
+    }
+
+    /// A body's `gas`: `−C ln V`, V the area of a 2D curve (closed, or closed by its chord)
+    /// or the volume of a closed 3D surface, positive at the start.
+    fn gas_term(
+        &self,
+        dim: usize,
+        l: &Loaded,
+        g: &GasSpec,
+        els: &[[usize; 4]],
+        x0: &[f64],
+    ) -> Result<Box<dyn Energy>, SceneFileError> {
+        let line = l.line;
+        let gk = format!("{}.gas.c", l.key);
+        if !(g.c > 0.0 && g.c.is_finite()) {
+            return Err(self.invalid(line, gk, g.c, "must be finite and > 0"));
+        }
+        match (l.kind, dim) {
+            (BodyKind::Curve, 2) => {
+                let poly = chain(els).map_err(|r| self.invalid(line, &gk, g.c, r))?;
+                let gas = GasEnergy::new(poly, g.c, x0);
+                if gas.area(x0).is_nan() || gas.area(x0) <= 0.0 {
+                    return Err(self.invalid(
+                        line,
+                        gk,
+                        g.c,
+                        "the curve encloses zero area in the initial configuration",
+                    ));
+                }
+                Ok(Box::new(gas))
+            }
+            (BodyKind::Surface, 3) => {
+                let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
+                let gas = Gas3dEnergy::new(tris, g.c, x0)
+                    .map_err(|e| self.invalid(line, &gk, g.c, e.to_string()))?;
+                if gas.volume(x0).is_nan() || gas.volume(x0) <= 0.0 {
+                    return Err(self.invalid(
+                        line,
+                        gk,
+                        g.c,
+                        "the surface encloses zero volume in the initial configuration",
+                    ));
+                }
+                Ok(Box::new(gas))
+            }
+            _ => Err(self.invalid(
+                line,
+                gk,
+                g.c,
+                "a gas fills a 2D curve (closed, or closed by its chord) or a closed 3D surface",
+            )),
+        }
+    }
+
+    /// A body's `pressure`: `p·A`, A the signed area of a 2D curve.
+    fn pressure_term(
+        &self,
+        dim: usize,
+        l: &Loaded,
+        p: &PressureSpec,
+        els: &[[usize; 4]],
+        x0: &[f64],
+    ) -> Result<Box<dyn Energy>, SceneFileError> {
+        let line = l.line;
+        let pk = format!("{}.pressure.p", l.key);
+        if !p.p.is_finite() {
+            return Err(self.invalid(line, pk, p.p, "must be finite"));
+        }
+        if !(l.kind == BodyKind::Curve && dim == 2) {
+            return Err(self.invalid(line, pk, p.p, "a pressure acts on a 2D curve"));
+        }
+        let poly = chain(els).map_err(|r| self.invalid(line, &pk, p.p, r))?;
+        Ok(Box::new(PressureEnergy::new(poly, p.p, x0)))
+    }
+
+    /// A body's `density`: its lumped masses added to gravity's load. A free body under a
+    /// non-zero gravity needs one.
+    #[allow(clippy::too_many_arguments)]
+    fn body_load(
+        &self,
+        mesh: &Mesh,
+        l: &Loaded,
+        s: &BodySpec,
+        els: &[[usize; 4]],
+        all_fixed: bool,
+        gravity: Option<&(Vec<f64>, usize)>,
+        loads: &mut Loads,
+    ) -> Result<(), SceneFileError> {
+        let key = &l.key;
+        if let Some(rho) = s.density {
+            if !(rho >= 0.0 && rho.is_finite()) {
+                return Err(self.invalid(
+                    l.line,
+                    format!("{key}.density"),
+                    rho,
+                    "must be finite and ≥ 0",
+                ));
+            }
+            if mesh.dim == 3 {
+                match l.kind {
+                    BodyKind::Curve => loads.gravity3.add_edges(
+                        &els.iter().map(|e| [e[0], e[1]]).collect::<Vec<_>>(),
+                        &mesh.x_ref,
+                        rho,
+                    ),
+                    BodyKind::Surface => loads.gravity3.add_triangles(
+                        &els.iter().map(|e| [e[0], e[1], e[2]]).collect::<Vec<_>>(),
+                        &mesh.x_ref,
+                        rho,
+                    ),
+                    BodyKind::Solid => loads.gravity3.add_tets(els, &mesh.x_ref, rho),
+                }
+            } else {
+                let g = match l.kind {
+                    BodyKind::Curve => Gravity::lumped_edges(
+                        mesh.nv(),
+                        &els.iter().map(|e| [e[0], e[1]]).collect::<Vec<_>>(),
+                        &mesh.x_ref,
+                        rho,
+                        [0.0; 2],
+                    ),
+                    _ => Gravity::lumped_triangles(
+                        mesh.nv(),
+                        &els.iter().map(|e| [e[0], e[1], e[2]]).collect::<Vec<_>>(),
+                        &mesh.x_ref,
+                        rho,
+                        [0.0; 2],
+                    ),
+                };
+                for (m, gm) in loads.mass.iter_mut().zip(&g.mass) {
+                    *m += gm;
+                }
+            }
+        } else if let Some((g, gl)) = gravity.filter(|_| !all_fixed) {
+            return Err(self.invalid(*gl, "gravity", fmt_list(g), format!("body {:?} ({key}) has a free vertex but no density: give {key}.density (0 for no load)", l.name)));
+        }
+        Ok(())
+    }
+
+    /// Unbounded: a free body with a gravity load must be able to touch an anchored body
+    /// (directly, through other bodies, or through welds).
+    fn check_bounded(
+        &self,
+        mesh: &Mesh,
+        (g, gl): &(Vec<f64>, usize),
+        specs: &[BodySpec],
+        allowed: &[bool],
+        welded: &[bool],
+        names: &[String],
+    ) -> Result<(), SceneFileError> {
+        let nb = mesh.bodies.len();
+        let has_load: Vec<bool> = specs
+            .iter()
+            .map(|s| s.density.unwrap_or(0.0) > 0.0)
+            .collect();
+        let mut supported: Vec<bool> = mesh
+            .bodies
+            .iter()
+            .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
+            .collect();
+        loop {
+            let mut changed = false;
+            for i in 0..nb {
+                if !supported[i]
+                    && (0..nb).any(|j| {
+                        j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j])
+                    })
+                {
+                    supported[i] = true;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        for i in 0..nb {
+            if !supported[i] && has_load[i] {
+                return Err(self.invalid(
+                    *gl,
+                    "gravity",
+                    fmt_list(g),
+                    format!(
+                        "the problem is unbounded: body {:?} has no fixed vertex, carries a \
+                         gravity load, and may touch no body that holds a fixed vertex \
+                         (directly or through other bodies; see [contact] and weld), so translating \
+                         it along gravity lowers J without bound",
+                        names[i]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// ε against the rest shapes: each self-touching body's reference must be admissible.
+    fn check_rest_shapes(
+        &self,
+        mesh: &Mesh,
+        eps: f64,
+        eps_line: usize,
+        allowed: &[bool],
+        names: &[String],
+    ) -> Result<(), SceneFileError> {
+        let nb = mesh.bodies.len();
+        let self_mask: Vec<bool> = (0..nb).map(|i| allowed[i * nb + i]).collect();
+        if self_mask.iter().any(|&a| a) {
+            let mut rest = mesh.clone();
+            rest.contact_filter = Some(ContactFilter::new(&rest, |i, j| i == j && self_mask[i]));
+            let md = min_distance(&rest, &rest.x_ref, eps, false);
+            if md.distance < eps {
+                return Err(self.invalid(
+                    eps_line,
+                    "eps",
+                    eps,
+                    format!(
+                        "larger than the scene can hold: in the reference (rest) configuration \
+                         {} are at distance {:.6e} < eps, so that body's rest shape is not \
+                         admissible (refine nothing: lower eps below {:.6e}, or exclude the \
+                         body's self-contact in [contact])",
+                        describe(mesh, names, &md.pair),
+                        md.distance,
+                        md.distance
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The start: every allowed pair of disjoint elements at least ε apart, and J finite.
+    fn check_start(
+        &self,
+        mesh: &Mesh,
+        x0: &[f64],
+        eps: f64,
+        energy: &TotalEnergy,
+        names: &[String],
+    ) -> Result<(), SceneFileError> {
+        let md0 = min_distance(mesh, x0, 2.0 * eps, false);
+        if md0.distance < eps {
+            return Err(SceneFileError::InadmissibleStart {
+                path: self.path.clone(),
+                pair: describe(mesh, names, &md0.pair),
+                distance: md0.distance,
+                eps,
+            });
+        }
+        if !energy.value(x0).is_finite() {
+            return Err(self.invalid(
+                1,
+                "body",
+                "(initial configuration)",
+                "the initial energy is not finite",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Initial velocities: uniform per body; a free vertex shared by bodies must get the
+    /// same velocity from each (no `velocity`: zero).
+    fn initial_velocities(
+        &self,
+        mesh: &Mesh,
+        loaded: &[Loaded],
+        specs: &[BodySpec],
+        names: &[String],
+    ) -> Result<Vec<f64>, SceneFileError> {
+        let dim = mesh.dim;
+        let mut v0 = vec![0.0; dim * mesh.nv()];
+        let mut v_from: Vec<Option<usize>> = vec![None; mesh.nv()];
+        for (bi, (l, s)) in loaded.iter().zip(specs).enumerate() {
+            let vel = match &s.velocity {
+                None => vec![0.0; dim],
+                Some(v) => {
+                    if v.len() != dim || v.iter().any(|c| !c.is_finite()) {
+                        return Err(self.invalid(
+                            l.line,
+                            format!("{}.velocity", l.key),
+                            fmt_list(v),
+                            format!("must be {dim} finite numbers"),
+                        ));
+                    }
+                    v.clone()
+                }
+            };
+            for (k, &v) in mesh.bodies[bi].vertices.iter().enumerate() {
+                if mesh.fixed[v] {
+                    continue;
+                }
+                let cur = &mut v0[dim * v..dim * v + dim];
+                if let Some(first) = v_from[v] {
+                    if cur != vel.as_slice() {
+                        return Err(self.invalid(
+                            l.line,
+                            format!("{}.velocity", l.key),
+                            fmt_list(&vel),
+                            format!(
+                                "vertex {k} of body {:?} is welded to body {:?}, whose velocity is \
+                                 {:?}: a free welded vertex needs the same velocity in every body \
+                                 holding it",
+                                l.name, names[first], cur
+                            ),
+                        ));
+                    }
+                } else {
+                    cur.copy_from_slice(&vel);
+                    v_from[v] = Some(bi);
+                }
+            }
+        }
+        Ok(v0)
+    }
+}
+
+/// The vertices in mesh numbering (`global[b][k]`: vertex `k` of body `b`): reference
+/// positions, fixed flags (fixed in any body that holds it), start positions. A welded vertex
+/// takes the positions of the first body that holds it.
+fn place_vertices(
+    dim: usize,
+    loaded: &[Loaded],
+    global: &[Vec<usize>],
+) -> (Vec<f64>, Vec<bool>, Vec<f64>) {
+    let nv = global.iter().flatten().copied().max().map_or(0, |m| m + 1);
+    let mut x0 = vec![0.0; dim * nv];
+    let mut x_ref = vec![0.0; dim * nv];
+    let mut fixed = vec![false; nv];
+    let mut seen = vec![false; nv];
+    for (l, map) in loaded.iter().zip(global) {
+        for (k, &v) in map.iter().enumerate() {
+            if !seen[v] {
+                seen[v] = true;
+                x_ref[dim * v..dim * v + dim].copy_from_slice(&l.x_ref[k][..dim]);
+                x0[dim * v..dim * v + dim].copy_from_slice(&l.x0[k][..dim]);
+            }
+            fixed[v] |= l.fixed[k];
+        }
+    }
+    (x_ref, fixed, x0)
+}
+
+/// The loaded bodies in mesh numbering, for the shared assembler ([`assemble_mesh`]): each
+/// body's elements, its h the longest reference edge of its elements.
+fn body_parts(loaded: &[Loaded], global: &[Vec<usize>]) -> Vec<BodyPart> {
+    loaded
+        .iter()
+        .zip(global)
+        .map(|(l, map)| BodyPart {
+            name: l.name.clone(),
+            kind: l.kind,
+            vertices: map.clone(),
+            elements: l
+                .elems
+                .iter()
+                .map(|e| std::array::from_fn(|k| if k < l.arity { map[e[k]] } else { 0 }))
+                .collect(),
+            arity: l.arity,
+            h: None,
+            edges: None,
+            faces: None,
+        })
+        .collect()
+}
+
+/// h: the mesh size of the bodies that deform (a body whose vertices are all fixed is an
+/// obstacle, its edges may be long); of all bodies if every vertex is fixed. Also returns
+/// which bodies have every vertex fixed.
+fn mesh_size(mesh: &Mesh) -> (f64, Vec<bool>) {
+    let deforms = |b: &Body| b.vertices.iter().any(|&v| !mesh.fixed[v]);
+    let h = if mesh.bodies.iter().any(deforms) {
+        mesh.bodies
+            .iter()
+            .filter(|b| deforms(b))
+            .map(|b| b.h)
+            .fold(0.0, f64::max)
+    } else {
+        mesh.bodies.iter().map(|b| b.h).fold(0.0, f64::max)
+    };
+    let body_all_fixed: Vec<bool> = mesh.bodies.iter().map(|b| !deforms(b)).collect();
+    (h, body_all_fixed)
+}
