@@ -21,6 +21,8 @@
 pub(crate) mod fd_test;
 pub mod gas;
 pub mod gas3d;
+#[cfg(test)]
+mod golden_test;
 pub mod gravity;
 pub mod gravity3d;
 pub mod membrane;
