@@ -6,8 +6,9 @@ use anyhow::{bail, Result};
 use contactlab::diagnostics::{converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings};
 use contactlab::dynamics::{
     lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, DynamicState, PairForce,
-    StepRecord, System, POTENTIAL_TERMS,
+    StepRecord, System,
 };
+use contactlab::energy::TermKind;
 use contactlab::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use contactlab::presets::Accuracy;
 use contactlab::scene::balloons::{self, BalloonsParams};
@@ -900,7 +901,7 @@ pub fn execute_dynamic(
         .energy
         .terms
         .iter()
-        .any(|t| POTENTIAL_TERMS.contains(&t.name()));
+        .any(|t| t.kind() == TermKind::Potential);
     let conserves = !has_potential && !ds.scene.mesh.fixed.iter().any(|&f| f);
     let m = dynamic_metrics(&res, free_mass, conserves);
     Ok((res, m))

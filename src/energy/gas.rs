@@ -22,7 +22,7 @@
 //! `±1`, so `M_i` has eigenvalues `±C/(2V)` and its PSD part is
 //! `(M_i + |M_i|)/2 = (k S + |k| I)/2`, used when `projected = true`.
 
-use super::{chunked_sum, chunked_triplets, push_block, Energy, Hessian, RankOne};
+use super::{chunked_sum, chunked_triplets, push_block, Energy, Hessian, RankOne, TermKind};
 use rayon::prelude::*;
 use std::collections::hash_map::{Entry, HashMap};
 
@@ -124,6 +124,10 @@ fn has_repeats(polygon: &[usize]) -> bool {
 impl Energy for GasEnergy {
     fn name(&self) -> &str {
         "gas"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

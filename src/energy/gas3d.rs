@@ -43,7 +43,9 @@
 
 use super::membrane3d::Matrix9;
 use super::neo_hookean3d::project_psd;
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, RankOne};
+use super::{
+    chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, RankOne, TermKind,
+};
 use std::collections::HashMap;
 
 const DIM: usize = 3;
@@ -242,6 +244,10 @@ fn dot(a: &[f64; DIM], b: &[f64; DIM]) -> f64 {
 impl Energy for Gas3dEnergy {
     fn name(&self) -> &str {
         "gas3d"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

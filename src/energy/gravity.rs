@@ -7,7 +7,7 @@
 //! so with `g = (0, −9.81)` it is `Σ_v m_v · 9.81 · y_v`. Linear in `x`: gradient
 //! `−m_v g`, zero Hessian.
 
-use super::{chunked_sum, Energy, Hessian};
+use super::{chunked_sum, Energy, Hessian, TermKind};
 use rayon::prelude::*;
 
 const DIM: usize = 2;
@@ -72,6 +72,10 @@ impl Gravity {
 impl Energy for Gravity {
     fn name(&self) -> &str {
         "gravity"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Potential
     }
 
     fn value(&self, x: &[f64]) -> f64 {

@@ -3,7 +3,7 @@
 //! masses for edges (rods, per unit length), surface triangles (sheets, per unit area) and
 //! tetrahedra (solids, per unit volume).
 
-use super::{chunked_sum, Energy, Hessian};
+use super::{chunked_sum, Energy, Hessian, TermKind};
 use rayon::prelude::*;
 
 const DIM: usize = 3;
@@ -66,6 +66,10 @@ impl Gravity3d {
 impl Energy for Gravity3d {
     fn name(&self) -> &str {
         "gravity3d"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Potential
     }
 
     fn value(&self, x: &[f64]) -> f64 {

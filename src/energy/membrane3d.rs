@@ -34,7 +34,7 @@
 //! collapsing or flipping).
 
 use super::neo_hookean3d::project_psd;
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, TermKind};
 use nalgebra::{Matrix2, Matrix3x2, SMatrix, Vector3};
 
 const DIM: usize = 3;
@@ -164,6 +164,10 @@ fn ds(x: &[f64], t: &[usize; 3]) -> Matrix3x2<f64> {
 impl Energy for Membrane3dEnergy {
     fn name(&self) -> &str {
         "membrane3d"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

@@ -199,10 +199,25 @@ impl Hessian {
     }
 }
 
+/// What a term of the energy stands for: how a dynamic run books its value
+/// ([`crate::dynamics::StepRecord`]'s `elastic` and `potential`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TermKind {
+    /// Stored energy of the bodies: membranes, strings, neo-Hookean solids, the gas, and the
+    /// pressure load.
+    Elastic,
+    /// Potential energy of an external field: gravity.
+    Potential,
+    /// The inertia term of a time step ([`crate::dynamics::Inertia`]), not part of a scene's J.
+    Inertia,
+}
+
 /// One term of the total energy.
 pub trait Energy: Send + Sync {
-    /// Short name used in outputs.
+    /// Short name, for display only (tables, messages); what the term is is [`Energy::kind`].
     fn name(&self) -> &str;
+    /// The kind of the term.
+    fn kind(&self) -> TermKind;
     /// `J(x)`; `f64::INFINITY` where undefined (inverted triangle, non-positive gas area).
     fn value(&self, x: &[f64]) -> f64;
     /// `g += ∇J(x)`.

@@ -23,7 +23,7 @@
 //! `projected = true` each element Hessian's negative eigenvalues are clamped to zero
 //! (symmetric eigendecomposition).
 
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, TermKind};
 use nalgebra::{Matrix2, Matrix6};
 
 const DIM: usize = 2;
@@ -135,6 +135,10 @@ fn ds(x: &[f64], t: &[usize; 3]) -> Matrix2<f64> {
 impl Energy for NeoHookean2d {
     fn name(&self) -> &str {
         "neo_hookean"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

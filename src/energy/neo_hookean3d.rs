@@ -31,7 +31,7 @@
 //! longest reference edge, or a non-finite `det Dm`) cannot be oriented and is rejected with a
 //! [`DegenerateTet`] error naming it.
 
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, TermKind};
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, Matrix3, SMatrix, U1};
 use thiserror::Error;
@@ -216,6 +216,10 @@ where
 impl Energy for NeoHookean3d {
     fn name(&self) -> &str {
         "neo_hookean3d"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {
