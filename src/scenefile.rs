@@ -65,8 +65,8 @@
 
 use crate::contact::min_distance;
 use crate::energy::{
-    Gas3dEnergy, GasEnergy, Gravity, Gravity3d, Membrane3dEnergy, MembraneEnergy, NeoHookean2d,
-    NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
+    Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy, NeoHookean2d, NeoHookean3d,
+    PressureEnergy, String3dEnergy, TotalEnergy,
 };
 use crate::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use crate::meshio::{read_mesh_file, MeshData, MeshReadError};
@@ -1164,7 +1164,7 @@ impl Ctx<'_> {
         // energy terms, body by body: material, then gas, then pressure; gravity last
         let mut energy = TotalEnergy::default();
         let mut mass = vec![0.0; mesh.nv()];
-        let mut gravity3 = Gravity3d::new(vec![0.0; mesh.nv()], [0.0; 3]);
+        let mut gravity3 = Gravity::<3>::new(vec![0.0; mesh.nv()], [0.0; 3]);
         for (bi, (l, s)) in loaded.iter().zip(&specs).enumerate() {
             let key = &l.key;
             let line = l.line;

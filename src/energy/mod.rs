@@ -24,7 +24,8 @@ pub mod gas3d;
 #[cfg(test)]
 mod golden_test;
 pub mod gravity;
-pub mod gravity3d;
+#[cfg(test)]
+mod legacy;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
@@ -35,7 +36,6 @@ pub mod string3d;
 pub use gas::GasEnergy;
 pub use gas3d::{Gas3dEnergy, OpenSurface};
 pub use gravity::Gravity;
-pub use gravity3d::Gravity3d;
 pub use membrane::MembraneEnergy;
 pub use membrane3d::Membrane3dEnergy;
 pub use neo_hookean::NeoHookean2d;

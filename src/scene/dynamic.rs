@@ -18,7 +18,7 @@
 //! and `ε = h/10` by default, `h` the largest reference edge of the moving bodies.
 
 use super::Scene;
-use crate::energy::{Gravity, Gravity3d, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
+use crate::energy::{Gravity, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
 use crate::mesh::{Body, BodyKind, Mesh, MeshError};
 use thiserror::Error;
 
@@ -625,7 +625,7 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
     };
     mesh.validate()?;
     let density = vec![0.0, p.density];
-    let mut gravity = Gravity3d::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
+    let mut gravity = Gravity::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
     gravity.add_triangles(&stris, &x, p.density);
     let energy = TotalEnergy {
         terms: vec![
