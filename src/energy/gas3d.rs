@@ -35,16 +35,16 @@
 //! product matrix (`[y]ₓ z = y × z`). `M_T` has a zero diagonal, so (unless it vanishes) it is
 //! indefinite; with `projected = true` each `M_T` is replaced by its positive semi-definite
 //! part (symmetric eigendecomposition, negative eigenvalues clamped to zero,
-//! [`super::neo_hookean3d::project_psd`]), as [`super::gas`] does with its shoelace blocks.
+//! [`super::project_psd`]), as [`super::gas`] does with its shoelace blocks.
 //!
 //! Assembly follows the conventions of [`super`]: the centroid and the volume are chunked
 //! sums, `∇V` is scatter-added per triangle in triangle order, the Hessian triplets are
 //! produced in chunks in triangle order; all bit-identical for any thread count.
 
 use super::membrane3d::Matrix9;
-use super::neo_hookean3d::project_psd;
 use super::{
-    chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, RankOne, TermKind,
+    chunked_sum, chunked_triplets, par_scatter, project_psd, push_block, Energy, Hessian, RankOne,
+    TermKind,
 };
 use std::collections::HashMap;
 

@@ -29,7 +29,6 @@ mod legacy;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
-pub mod neo_hookean3d;
 pub mod pressure;
 pub mod string3d;
 
@@ -38,11 +37,12 @@ pub use gas3d::{Gas3dEnergy, OpenSurface};
 pub use gravity::Gravity;
 pub use membrane::MembraneEnergy;
 pub use membrane3d::Membrane3dEnergy;
-pub use neo_hookean::NeoHookean2d;
-pub use neo_hookean3d::{DegenerateTet, NeoHookean3d};
+pub use neo_hookean::{DegenerateTet, NeoHookean, NeoHookean2d, NeoHookean3d};
 pub use pressure::PressureEnergy;
 pub use string3d::String3dEnergy;
 
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, SMatrix, U1};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -150,6 +150,25 @@ pub(crate) fn push_block(
                 }
             }
         }
+    }
+}
+
+/// Replaces the symmetric matrix `m` by its positive semi-definite part when it has a negative
+/// eigenvalue (eigendecomposition `m = Q Λ Qᵀ`, then `Q max(Λ, 0) Qᵀ`, symmetrized); leaves it
+/// untouched otherwise. The element-wise projection of the energies whose element Hessians
+/// have no closed-form positive part (neo-Hookean, 3D membrane, 3D gas).
+pub(crate) fn project_psd<const N: usize>(m: &mut SMatrix<f64, N, N>)
+where
+    Const<N>: DimSub<U1>,
+    DefaultAllocator: Allocator<Const<N>, DimDiff<Const<N>, U1>> + Allocator<DimDiff<Const<N>, U1>>,
+{
+    let eig = m.symmetric_eigen();
+    if eig.eigenvalues.min() < 0.0 {
+        let d = eig.eigenvalues.map(|v| v.max(0.0));
+        let p = eig.eigenvectors
+            * SMatrix::<f64, N, N>::from_diagonal(&d)
+            * eig.eigenvectors.transpose();
+        *m = (p + p.transpose()) * 0.5;
     }
 }
 

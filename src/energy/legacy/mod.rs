@@ -7,6 +7,8 @@
 
 pub mod gravity;
 pub mod gravity3d;
+pub mod neo_hookean;
+pub mod neo_hookean3d;
 
 use super::fd_test::term_bits;
 use super::Energy;
@@ -100,4 +102,156 @@ fn legacy_gravity_bit_identical() {
         assert_eq!(old.mass, new.mass);
         assert_same(&old, &new, &x);
     }
+}
+
+/// A perturbed `m×m` grid of spacing `0.5` split into triangles of both orientations.
+fn grid2(rng: &mut ChaCha8Rng, m: usize) -> (Vec<f64>, Vec<[usize; 3]>) {
+    let mut xr = Vec::new();
+    for j in 0..m {
+        for i in 0..m {
+            xr.push(i as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+            xr.push(j as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+        }
+    }
+    let mut tris = Vec::new();
+    for j in 0..m - 1 {
+        for i in 0..m - 1 {
+            let v = m * j + i;
+            if (i + j) % 2 == 0 {
+                tris.push([v, v + 1, v + m + 1]);
+                tris.push([v, v + m, v + m + 1]);
+            } else {
+                tris.push([v, v + 1, v + m]);
+                tris.push([v + 1, v + m + 1, v + m]);
+            }
+        }
+    }
+    (xr, tris)
+}
+
+/// The perturbed `n×n×n` grid of cubes of side `0.5`, 6 tets each (half listed negatively).
+fn grid3(rng: &mut ChaCha8Rng, n: usize) -> (Vec<f64>, Vec<[usize; 4]>) {
+    let m = n + 1;
+    let mut x = Vec::new();
+    for k in 0..m {
+        for j in 0..m {
+            for i in 0..m {
+                for c in [i, j, k] {
+                    x.push(c as f64 * 0.5 + rng.gen_range(-0.04..0.04));
+                }
+            }
+        }
+    }
+    let step = [1, m, m * m];
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let mut tets = Vec::new();
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let v0 = i + m * j + m * m * k;
+                for p in &perms {
+                    let v1 = v0 + step[p[0]];
+                    let v2 = v1 + step[p[1]];
+                    tets.push([v0, v1, v2, v2 + step[p[2]]]);
+                }
+            }
+        }
+    }
+    (x, tets)
+}
+
+/// `x ↦ (I + A) x + t + noise`, `|A_ij| < amp`, noise `< noise` per coordinate (`x_ref`
+/// itself when both are 0).
+fn deform(rng: &mut ChaCha8Rng, xr: &[f64], dim: usize, amp: f64, noise: f64) -> Vec<f64> {
+    if amp == 0.0 && noise == 0.0 {
+        return xr.to_vec();
+    }
+    let a: Vec<f64> = (0..dim * dim)
+        .map(|k| (if k % (dim + 1) == 0 { 1.0 } else { 0.0 }) + rng.gen_range(-amp..amp))
+        .collect();
+    let t: Vec<f64> = (0..dim).map(|_| rng.gen_range(-1.0..1.0)).collect();
+    let mut x = xr.to_vec();
+    for (p, q) in x.chunks_mut(dim).zip(xr.chunks(dim)) {
+        for i in 0..dim {
+            p[i] = t[i] + rng.gen_range(-noise..noise);
+            for j in 0..dim {
+                p[i] += a[dim * i + j] * q[j];
+            }
+        }
+    }
+    x
+}
+
+#[test]
+fn legacy_neo_hookean_bit_identical() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1002);
+    let (mut indefinite, mut inverted) = (0, 0);
+    for round in 0..24 {
+        // 2D (the last round: more than 4 chunks of triangles)
+        let m = [3, 6, 20, 100][if round == 23 { 3 } else { round % 3 }];
+        let (xr, tris) = grid2(&mut rng, m);
+        let (mu, la) = (rng.gen_range(0.5..2.0), rng.gen_range(0.5..5.0));
+        let old = neo_hookean::NeoHookean2d::new(tris.clone(), &xr, mu, la);
+        let new = super::NeoHookean2d::new(tris, &xr, mu, la);
+        assert_eq!(old.triangles, new.elements);
+        assert!(old
+            .area
+            .iter()
+            .zip(&new.measure)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(old.dm_inv == new.dm_inv);
+        for (amp, noise) in [(0.0, 0.0), (0.2, 0.03), (0.5, 0.1), (0.8, 0.3)] {
+            let x = deform(&mut rng, &xr, 2, amp, noise);
+            assert_same(&old, &new, &x);
+            let (mut h, mut hp) = (super::Hessian::default(), super::Hessian::default());
+            new.add_hessian(&x, false, &mut h);
+            new.add_hessian(&x, true, &mut hp);
+            indefinite += (h != hp) as usize;
+            inverted += (new.value(&x) == f64::INFINITY) as usize;
+        }
+        // 3D (the last round: more than one chunk of tets)
+        let n = [1, 2, 3, 9][if round == 23 { 3 } else { round % 3 }];
+        let (xr, tets) = grid3(&mut rng, n);
+        let (mu, la) = (rng.gen_range(0.5..2.0), rng.gen_range(0.5..5.0));
+        let old = neo_hookean3d::NeoHookean3d::new(tets.clone(), &xr, mu, la).unwrap();
+        let new = super::NeoHookean3d::new(tets, &xr, mu, la).unwrap();
+        assert_eq!(old.tets, new.elements);
+        assert!(old
+            .volume
+            .iter()
+            .zip(&new.measure)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(old.dm_inv == new.dm_inv);
+        for (amp, noise) in [(0.0, 0.0), (0.2, 0.02), (0.45, 0.06), (0.8, 0.2)] {
+            let x = deform(&mut rng, &xr, 3, amp, noise);
+            assert_same(&old, &new, &x);
+            let (mut h, mut hp) = (super::Hessian::default(), super::Hessian::default());
+            new.add_hessian(&x, false, &mut h);
+            new.add_hessian(&x, true, &mut hp);
+            indefinite += (h != hp) as usize;
+            inverted += (new.value(&x) == f64::INFINITY) as usize;
+        }
+    }
+    assert!(indefinite > 20 && inverted > 5, "{indefinite} {inverted}");
+    // a degenerate tet: the same error
+    let (mut xr, mut tets) = grid3(&mut rng, 1);
+    xr.extend([xr[0] + 0.3, xr[1] + 0.2, xr[2]]);
+    let p = |v: usize| [xr[3 * v], xr[3 * v + 1], xr[3 * v + 2]];
+    let (a, b) = (p(0), p(1));
+    let nv = xr.len() / 3;
+    xr.extend([2.0 * b[0] - a[0], 2.0 * b[1] - a[1], 2.0 * b[2] - a[2]]); // on the line 0–1
+    tets.push([0, 1, nv, nv - 1]);
+    let e_old = neo_hookean3d::NeoHookean3d::new(tets.clone(), &xr, 1.0, 1.0).unwrap_err();
+    let e_new = super::NeoHookean3d::new(tets, &xr, 1.0, 1.0).unwrap_err();
+    assert_eq!(
+        (e_old.index, e_old.tet, e_old.volume.to_bits()),
+        (e_new.index, e_new.tet, e_new.volume.to_bits())
+    );
 }
