@@ -1270,7 +1270,7 @@ impl Ctx<'_> {
                     (BodyKind::Curve, 2) => {
                         let poly = chain(els).map_err(|r| self.invalid(line, &gk, g.c, r))?;
                         let gas = GasEnergy::new(poly, g.c, &x0);
-                        if gas.area(&x0).is_nan() || gas.area(&x0) <= 0.0 {
+                        if gas.measure(&x0).is_nan() || gas.measure(&x0) <= 0.0 {
                             return Err(self.invalid(line, gk, g.c, "the curve encloses zero area in the initial configuration"));
                         }
                         energy.terms.push(Box::new(gas));
@@ -1278,7 +1278,7 @@ impl Ctx<'_> {
                     (BodyKind::Surface, 3) => {
                         let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
                         let gas = Gas3dEnergy::new(tris, g.c, &x0).map_err(|e| self.invalid(line, &gk, g.c, e.to_string()))?;
-                        if gas.volume(&x0).is_nan() || gas.volume(&x0) <= 0.0 {
+                        if gas.measure(&x0).is_nan() || gas.measure(&x0) <= 0.0 {
                             return Err(self.invalid(line, gk, g.c, "the surface encloses zero volume in the initial configuration"));
                         }
                         energy.terms.push(Box::new(gas));

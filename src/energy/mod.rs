@@ -20,7 +20,6 @@
 #[cfg(test)]
 pub(crate) mod fd_test;
 pub mod gas;
-pub mod gas3d;
 #[cfg(test)]
 mod golden_test;
 pub mod gravity;
@@ -32,8 +31,7 @@ pub mod neo_hookean;
 pub mod pressure;
 pub mod string3d;
 
-pub use gas::GasEnergy;
-pub use gas3d::{Gas3dEnergy, OpenSurface};
+pub use gas::{Gas, Gas3dEnergy, GasEnergy, OpenSurface};
 pub use gravity::Gravity;
 pub use membrane::MembraneEnergy;
 pub use membrane3d::Membrane3dEnergy;

@@ -5,6 +5,8 @@
 
 #![allow(missing_docs, dead_code)]
 
+pub mod gas;
+pub mod gas3d;
 pub mod gravity;
 pub mod gravity3d;
 pub mod neo_hookean;
@@ -254,4 +256,165 @@ fn legacy_neo_hookean_bit_identical() {
         (e_old.index, e_old.tet, e_old.volume.to_bits()),
         (e_new.index, e_new.tet, e_new.volume.to_bits())
     );
+}
+
+/// A UV sphere (`nlat − 1` rings of `nlon` vertices and two poles, outward triangles) of radius
+/// `r` around `center`, each coordinate moved by less than `noise`.
+fn sphere(
+    rng: &mut ChaCha8Rng,
+    nlat: usize,
+    nlon: usize,
+    r: f64,
+    center: [f64; 3],
+    noise: f64,
+) -> (Vec<f64>, Vec<[usize; 3]>) {
+    use std::f64::consts::PI;
+    let mut x = vec![0.0, 0.0, r];
+    for j in 1..nlat {
+        let th = PI * j as f64 / nlat as f64;
+        for i in 0..nlon {
+            let ph = 2.0 * PI * i as f64 / nlon as f64;
+            x.extend([
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos(),
+            ]);
+        }
+    }
+    x.extend([0.0, 0.0, -r]);
+    for p in x.chunks_mut(3) {
+        for k in 0..3 {
+            p[k] += center[k] + rng.gen_range(-noise..noise);
+        }
+    }
+    let ring = |j: usize, i: usize| 1 + (j - 1) * nlon + i % nlon;
+    let south = 1 + (nlat - 1) * nlon;
+    let mut tris = Vec::new();
+    for i in 0..nlon {
+        tris.push([0, ring(1, i), ring(1, i + 1)]);
+    }
+    for j in 1..nlat - 1 {
+        for i in 0..nlon {
+            let (a, b, c, d) = (
+                ring(j, i),
+                ring(j + 1, i),
+                ring(j + 1, i + 1),
+                ring(j, i + 1),
+            );
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
+        }
+    }
+    for i in 0..nlon {
+        tris.push([south, ring(nlat - 1, i + 1), ring(nlat - 1, i)]);
+    }
+    (x, tris)
+}
+
+fn bits(v: &[(usize, f64)]) -> Vec<(usize, u64)> {
+    v.iter().map(|&(i, w)| (i, w.to_bits())).collect()
+}
+
+#[test]
+fn legacy_gas_bit_identical() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1003);
+    for round in 0..30 {
+        // 2D: a perturbed parabola closed by its chord, either orientation, sometimes with a
+        // repeated vertex; the last rounds with more than 4 chunks of vertices
+        let n = [5, 12, 40, 5 * super::CHUNK + 7][if round >= 27 { 3 } else { round % 3 }];
+        let mut x0 = vec![0.0; 2 * (n + 1)];
+        for v in 0..n {
+            let t = -1.0 + 2.0 * v as f64 / (n - 1) as f64;
+            x0[2 * v] = t + rng.gen_range(-0.03..0.03);
+            x0[2 * v + 1] = 1.0 - t * t + rng.gen_range(-0.03..0.03);
+        }
+        x0[2 * n] = 5.0;
+        x0[2 * n + 1] = -3.0;
+        let mut poly: Vec<usize> = (0..n).collect();
+        if round % 2 == 1 {
+            poly.reverse();
+        }
+        if round % 5 == 2 {
+            poly.push(poly[0]);
+        }
+        let c = rng.gen_range(0.5..3.0);
+        let old = gas::GasEnergy::new(poly.clone(), c, &x0);
+        let new = super::GasEnergy::new(poly, c, &x0);
+        assert_eq!(old.polygon, new.region.polygon);
+        assert_eq!(old.sign.to_bits(), new.region.sign.to_bits());
+        for amp in [0.0, 0.02, 0.2, 1.5] {
+            let x: Vec<f64> = x0
+                .iter()
+                .map(|v| v + amp * rng.gen_range(-1.0..1.0))
+                .collect();
+            assert_same(&old, &new, &x);
+            assert_eq!(old.area(&x).to_bits(), new.region.area(&x).to_bits());
+            assert_eq!(
+                bits(&old.area_gradient(&x)),
+                bits(&new.region.area_gradient(&x))
+            );
+        }
+        // a flipped configuration: area < 0, J = +∞
+        let x: Vec<f64> = x0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i % 2 == 1 { -v } else { *v })
+            .collect();
+        assert!(new.region.area(&x) < 0.0);
+        assert_same(&old, &new, &x);
+        // 3D: a perturbed UV sphere off the origin, listed outward or inward; the last rounds
+        // with more than a chunk of triangles
+        let (nlat, nlon) = if round >= 27 {
+            (40, 64)
+        } else {
+            (3 + round % 4, 4 + round % 5)
+        };
+        let r = rng.gen_range(0.5..1.5);
+        let center = [
+            rng.gen_range(-5.0..5.0),
+            rng.gen_range(-5.0..5.0),
+            100.0 * rng.gen_range(-1.0..1.0),
+        ];
+        let (mut x0, mut tris) = sphere(&mut rng, nlat, nlon, r, center, 0.05 * r);
+        x0.extend([5.0, -3.0, 2.0]);
+        if round % 2 == 1 {
+            for t in tris.iter_mut() {
+                t.swap(0, 1);
+            }
+        }
+        let c = rng.gen_range(0.5..3.0);
+        let old = gas3d::Gas3dEnergy::new(tris.clone(), c, &x0).unwrap();
+        let new = super::Gas3dEnergy::new(tris, c, &x0).unwrap();
+        assert_eq!(old.triangles(), new.region.triangles());
+        assert_eq!(old.vertices(), new.region.vertices());
+        for amp in [0.0, 0.02, 0.3, 2.0] {
+            let x: Vec<f64> = x0
+                .iter()
+                .map(|v| v + amp * r * rng.gen_range(-1.0..1.0))
+                .collect();
+            assert_same(&old, &new, &x);
+            assert_eq!(old.volume(&x).to_bits(), new.region.volume(&x).to_bits());
+            assert_eq!(
+                bits(&old.volume_gradient(&x)),
+                bits(&new.region.volume_gradient(&x))
+            );
+        }
+        let x: Vec<f64> = x0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i % 3 == 2 { -v } else { *v })
+            .collect();
+        assert!(new.region.volume(&x) < 0.0);
+        assert_same(&old, &new, &x);
+        // an open surface: the same error
+        let tris = new.region.triangles()[1..].to_vec();
+        assert_eq!(
+            gas3d::Gas3dEnergy::new(tris.clone(), c, &x0)
+                .unwrap_err()
+                .to_string(),
+            super::Gas3dEnergy::new(tris, c, &x0)
+                .unwrap_err()
+                .to_string()
+        );
+    }
 }
