@@ -4,6 +4,45 @@
 //! All functions take the flat position vector `x` (`dim` coordinates per vertex) and use the
 //! degree-of-freedom numbering `dim*v + k` of [`crate::mesh`].
 //!
+//! # The terms
+//!
+//! Each term implements [`Energy`]; its module documents its formulas. Where the formulas
+//! allow it a term is one type generic over the dimension `D`, with the per-dimension part
+//! kept as small as possible:
+//!
+//! * [`membrane::TensionString`]`<D>`: tension-only strings and membranes of P1 edges
+//!   ([`MembraneEnergy`] in 2D, [`String3dEnergy`] in 3D);
+//! * [`NeoHookean`]`<D, N>`: compressible neo-Hookean P1 simplices ([`NeoHookean2d`]
+//!   triangles, [`NeoHookean3d`] tetrahedra);
+//! * [`Gas`]`<R>`: the enclosed gas `−C ln V` over a [`gas::Region`] ([`GasEnergy`] over a
+//!   closed polygon's area, [`Gas3dEnergy`] over a closed surface's volume);
+//! * [`Gravity`]`<D>`: gravity on lumped vertex masses;
+//! * [`Membrane3dEnergy`] (St Venant–Kirchhoff triangles in 3D) and [`PressureEnergy`] (a
+//!   pressure load on a closed 2D curve) exist in one dimension only.
+//!
+//! What a term stands for (elastic, potential, inertia) is its [`TermKind`]
+//! ([`Energy::kind`]); [`Energy::name`] is for display only.
+//!
+//! # Adding an energy
+//!
+//! At most three files:
+//!
+//! 1. the new energy's file `src/energy/NAME.rs`: a type implementing [`Energy`] (`kind`,
+//!    `value`, `add_gradient`, `add_hessian` with its element-wise projection), generic over
+//!    the dimension where the formulas allow it, assembled with the helpers below
+//!    ([`chunked_sum`], [`par_scatter`], [`chunked_triplets`], [`push_block`],
+//!    [`project_psd`]) so that it is thread-count independent; its module doc gives the
+//!    formulas, and its tests the finite-difference gradient and Hessian, the projection
+//!    (positive semi-definite), rigid invariance and thread independence (helpers in
+//!    `fd_test.rs`);
+//! 2. this file: `pub mod NAME;` and the `pub use` of the type;
+//! 3. what uses it: the scene builder (`src/scene/`) that pushes it into a scene's
+//!    [`TotalEnergy`], or the scene-file schema (the `[[body]]` keys read by the scene-file
+//!    loader) to offer it in scene files.
+//!
+//! Nothing else needs to know the term: the outer loop, the QP assembly and the dynamic runs
+//! only see a [`TotalEnergy`] and each term's [`TermKind`].
+//!
 //! # Parallelism and determinism
 //!
 //! Assembly is rayon-parallel, and its results are bit-for-bit independent of the number of
@@ -334,6 +373,69 @@ mod tests {
             t
         });
         assert!(t == expected);
+    }
+
+    #[test]
+    fn energy_term_kinds_and_names() {
+        let x2 = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+        let x3 = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let tet = vec![[0, 1, 2, 3]];
+        let surface = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let terms: Vec<(Box<dyn Energy>, &str, TermKind)> = vec![
+            (
+                Box::new(MembraneEnergy::new(vec![[0, 1]], &x2, 1.0)),
+                "membrane",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(String3dEnergy::new(vec![[0, 1]], &x3, 1.0)),
+                "string3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Membrane3dEnergy::new(vec![[0, 1, 2]], &x3, 1.0, 1.0)),
+                "membrane3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(NeoHookean2d::new(vec![[0, 1, 2]], &x2, 1.0, 1.0)),
+                "neo_hookean",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(NeoHookean3d::new(tet, &x3, 1.0, 1.0).unwrap()),
+                "neo_hookean3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(GasEnergy::new(vec![0, 1, 2], 1.0, &x2)),
+                "gas",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Gas3dEnergy::new(surface, 1.0, &x3).unwrap()),
+                "gas3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(PressureEnergy::new(vec![0, 1, 2], 1.0, &x2)),
+                "pressure",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Gravity::new(vec![1.0; 3], [0.0, -1.0])),
+                "gravity",
+                TermKind::Potential,
+            ),
+            (
+                Box::new(Gravity::new(vec![1.0; 4], [0.0, 0.0, -1.0])),
+                "gravity3d",
+                TermKind::Potential,
+            ),
+        ];
+        for (t, name, kind) in terms {
+            assert_eq!((t.name(), t.kind()), (name, kind));
+        }
     }
 
     #[test]
