@@ -59,11 +59,7 @@
 #[cfg(test)]
 pub(crate) mod fd_test;
 pub mod gas;
-#[cfg(test)]
-mod golden_test;
 pub mod gravity;
-#[cfg(test)]
-mod legacy;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
