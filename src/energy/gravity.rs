@@ -1,32 +1,38 @@
-//! Gravity (external potential energy of the lumped masses):
+//! Gravity (external potential energy of lumped vertex masses) in `D = 2` or `3` dimensions:
 //!
 //! ```text
 //! J(x) = −Σ_v m_v g · x_v,
 //! ```
 //!
-//! so with `g = (0, −9.81)` it is `Σ_v m_v · 9.81 · y_v`. Linear in `x`: gradient
-//! `−m_v g`, zero Hessian.
+//! so with `g = (0, −9.81)` it is `Σ_v m_v · 9.81 · y_v`. Linear in `x`: gradient `−m_v g`,
+//! zero Hessian.
+//!
+//! The lumped masses of P1 elements of density `ρ` (each element gives an equal share of its
+//! reference mass to each of its vertices): in 2D [`Gravity::lumped_edges`] (per unit length)
+//! and [`Gravity::lumped_triangles`] (per unit area) build the term; in 3D
+//! [`Gravity::add_edges`] (rods, per unit length), [`Gravity::add_triangles`] (sheets, per
+//! unit area) and [`Gravity::add_tets`] (solids, per unit volume) add to its masses.
 
-use super::{chunked_sum, Energy, Hessian};
+use super::{chunked_sum, Energy, Hessian, TermKind};
 use rayon::prelude::*;
 
-const DIM: usize = 2;
-
-/// Gravity on lumped vertex masses (2D).
+/// Gravity on lumped vertex masses, in `D` dimensions (`D = 2` or `3`).
 #[derive(Clone, Debug)]
-pub struct Gravity {
+pub struct Gravity<const D: usize> {
     /// Lumped mass per vertex.
     pub mass: Vec<f64>,
     /// Gravitational acceleration vector.
-    pub g: [f64; 2],
+    pub g: [f64; D],
 }
 
-impl Gravity {
+impl<const D: usize> Gravity<D> {
     /// Gravity with the given vertex masses.
-    pub fn new(mass: Vec<f64>, g: [f64; 2]) -> Self {
+    pub fn new(mass: Vec<f64>, g: [f64; D]) -> Self {
         Self { mass, g }
     }
+}
 
+impl Gravity<2> {
     /// Lumped masses of P1 triangles of density `rho` (per unit area): each triangle gives a
     /// third of its reference mass to each vertex. `nv` is the number of vertices.
     pub fn lumped_triangles(
@@ -38,7 +44,7 @@ impl Gravity {
     ) -> Self {
         let mut mass = vec![0.0; nv];
         for t in triangles {
-            let p = |v: usize, k: usize| x_ref[DIM * v + k];
+            let p = |v: usize, k: usize| x_ref[2 * v + k];
             let area = 0.5
                 * ((p(t[1], 0) - p(t[0], 0)) * (p(t[2], 1) - p(t[0], 1))
                     - (p(t[2], 0) - p(t[0], 0)) * (p(t[1], 1) - p(t[0], 1)))
@@ -60,8 +66,7 @@ impl Gravity {
     ) -> Self {
         let mut mass = vec![0.0; nv];
         for &[a, b] in edges {
-            let l =
-                (x_ref[DIM * b] - x_ref[DIM * a]).hypot(x_ref[DIM * b + 1] - x_ref[DIM * a + 1]);
+            let l = (x_ref[2 * b] - x_ref[2 * a]).hypot(x_ref[2 * b + 1] - x_ref[2 * a + 1]);
             mass[a] += 0.5 * rho * l;
             mass[b] += 0.5 * rho * l;
         }
@@ -69,16 +74,71 @@ impl Gravity {
     }
 }
 
-impl Energy for Gravity {
+/// Vertex `v` of the flat 3D positions `x`.
+fn p3(x: &[f64], v: usize) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])
+}
+
+impl Gravity<3> {
+    /// Adds the lumped masses of P1 edges of density `rho` per unit length (half to each end).
+    pub fn add_edges(&mut self, edges: &[[usize; 2]], x_ref: &[f64], rho: f64) {
+        for &[a, b] in edges {
+            let m = rho * (p3(x_ref, b) - p3(x_ref, a)).norm();
+            self.mass[a] += 0.5 * m;
+            self.mass[b] += 0.5 * m;
+        }
+    }
+
+    /// Adds the lumped masses of P1 triangles of density `rho` per unit area (a third each).
+    pub fn add_triangles(&mut self, triangles: &[[usize; 3]], x_ref: &[f64], rho: f64) {
+        for t in triangles {
+            let (a, b, c) = (p3(x_ref, t[0]), p3(x_ref, t[1]), p3(x_ref, t[2]));
+            let m = rho * 0.5 * (b - a).cross(&(c - a)).norm();
+            for &v in t {
+                self.mass[v] += m / 3.0;
+            }
+        }
+    }
+
+    /// Adds the lumped masses of P1 tetrahedra of density `rho` per unit volume (a quarter
+    /// each).
+    pub fn add_tets(&mut self, tets: &[[usize; 4]], x_ref: &[f64], rho: f64) {
+        for t in tets {
+            let a = p3(x_ref, t[0]);
+            let vol = ((p3(x_ref, t[1]) - a).cross(&(p3(x_ref, t[2]) - a)))
+                .dot(&(p3(x_ref, t[3]) - a))
+                .abs()
+                / 6.0;
+            for &v in t {
+                self.mass[v] += rho * vol / 4.0;
+            }
+        }
+    }
+}
+
+impl<const D: usize> Energy for Gravity<D> {
     fn name(&self) -> &str {
-        "gravity"
+        if D == 2 {
+            "gravity"
+        } else {
+            "gravity3d"
+        }
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Potential
     }
 
     fn value(&self, x: &[f64]) -> f64 {
         -chunked_sum(self.mass.len(), |r| {
             let mut s = 0.0;
             for v in r {
-                s += self.mass[v] * (self.g[0] * x[DIM * v] + self.g[1] * x[DIM * v + 1]);
+                // g · x_v, summed in coordinate order
+                let mut gx = self.g[0] * x[D * v];
+                for k in 1..D {
+                    gx += self.g[k] * x[D * v + k];
+                }
+                s += self.mass[v] * gx;
             }
             s
         })
@@ -87,13 +147,14 @@ impl Energy for Gravity {
     /// Each vertex's dofs get their own contribution: parallel, and the same whatever the
     /// thread count.
     fn add_gradient(&self, _x: &[f64], g: &mut [f64]) {
-        g[..DIM * self.mass.len()]
-            .par_chunks_mut(DIM)
+        g[..D * self.mass.len()]
+            .par_chunks_mut(D)
             .with_min_len(1024)
             .zip(self.mass.par_iter())
             .for_each(|(gv, m)| {
-                gv[0] -= m * self.g[0];
-                gv[1] -= m * self.g[1];
+                for (gc, ac) in gv.iter_mut().zip(self.g) {
+                    *gc -= m * ac;
+                }
             });
     }
 
@@ -129,6 +190,7 @@ mod tests {
         let mut h = Hessian::default();
         grav.add_hessian(&x, true, &mut h);
         assert!(h.triplets.is_empty() && h.rank_one.is_empty());
+        assert_eq!((grav.name(), grav.kind()), ("gravity", TermKind::Potential));
     }
 
     #[test]
@@ -159,5 +221,50 @@ mod tests {
         grav.add_gradient(&x, &mut g);
         assert_eq!(g[2 * nv..], [0.0, 0.0]);
         assert_eq!(g[2 * (nv - 1) + 1], grav.mass[nv - 1] * 9.81);
+    }
+
+    #[test]
+    fn energy_gravity3d_value_gradient_and_lumped_masses() {
+        // unit cube corner tet (volume 1/6), a right triangle of area 1/2, an edge of length 1
+        let x = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let mut g = Gravity::new(vec![0.0; 4], [0.0, 0.0, -9.81]);
+        g.add_tets(&[[0, 1, 2, 3]], &x, 6.0);
+        assert!((g.mass.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        g.add_triangles(&[[0, 1, 2]], &x, 2.0);
+        assert!((g.mass.iter().sum::<f64>() - 2.0).abs() < 1e-15);
+        g.add_edges(&[[0, 3]], &x, 1.0);
+        assert!((g.mass.iter().sum::<f64>() - 3.0).abs() < 1e-15);
+        // J = Σ m_v 9.81 z_v: only vertex 3 is above z = 0
+        assert!((g.value(&x) - 9.81 * g.mass[3]).abs() < 1e-14);
+        let mut grad = vec![0.0; 12];
+        g.add_gradient(&x, &mut grad);
+        for v in 0..4 {
+            assert_eq!(&grad[3 * v..3 * v + 2], &[0.0, 0.0]);
+            assert_eq!(grad[3 * v + 2], g.mass[v] * 9.81);
+        }
+        // linear: the gradient is the finite difference
+        let mut xp = x;
+        xp[11] += 1e-3;
+        assert!(((g.value(&xp) - g.value(&x)) / 1e-3 - grad[11]).abs() < 1e-9);
+        let mut h = Hessian::default();
+        g.add_hessian(&x, true, &mut h);
+        assert!(h.triplets.is_empty() && h.rank_one.is_empty());
+        assert_eq!((g.name(), g.kind()), ("gravity3d", TermKind::Potential));
+    }
+
+    #[test]
+    fn energy_gravity3d_thread_independent() {
+        use crate::energy::fd_test::{assert_thread_independent, term_bits};
+        use crate::energy::CHUNK;
+        let nv = 3 * CHUNK + 5;
+        let mut rng = ChaCha8Rng::seed_from_u64(14);
+        let mass: Vec<f64> = (0..nv).map(|_| rng.gen_range(0.1..2.0)).collect();
+        let grav = Gravity::new(mass, [0.3, -0.2, -9.81]);
+        let x: Vec<f64> = (0..3 * nv + 3).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        let bits = assert_thread_independent(|| term_bits(&grav, &x));
+        assert!(f64::from_bits(bits[0]).is_finite());
+        let mut g = vec![0.0; x.len()];
+        grav.add_gradient(&x, &mut g);
+        assert_eq!(g[3 * nv..], [0.0, 0.0, 0.0]);
     }
 }

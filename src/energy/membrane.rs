@@ -20,7 +20,7 @@
 //! `|F| > 1`, `s > 0` and `H` is positive definite, and it is `0` for `|F| < 1`, so the exact
 //! Hessian is already positive semi-definite: `projected` changes nothing.
 
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, TermKind};
 
 /// Tension-only energy of a set of P1 edges in `D` dimensions: [`MembraneEnergy`] (2D, the
 /// balloons' membranes) and [`super::String3dEnergy`] (3D strings and rods) are this type.
@@ -83,6 +83,10 @@ impl<const D: usize> Energy for TensionString<D> {
         } else {
             "string3d"
         }
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

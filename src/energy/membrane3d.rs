@@ -27,14 +27,15 @@
 //! Hessian is `|T| Σ_{l,n} ∂P_cl/∂F_dn G_al G_bn` at dofs `(3a + c, 3b + d)`. It is indefinite
 //! in compression (a compressed membrane buckles: `S` has a negative eigenvalue); with
 //! `projected = true` each element Hessian's negative eigenvalues are clamped to zero
-//! (symmetric eigendecomposition, [`super::neo_hookean3d::project_psd`]), an element Hessian
+//! (symmetric eigendecomposition, [`super::project_psd`]), an element Hessian
 //! that is already positive semi-definite being kept as is.
 //!
 //! The energy is finite everywhere (St Venant–Kirchhoff does not prevent a triangle from
 //! collapsing or flipping).
 
-use super::neo_hookean3d::project_psd;
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian};
+use super::{
+    chunked_sum, chunked_triplets, par_scatter, project_psd, push_block, Energy, Hessian, TermKind,
+};
 use nalgebra::{Matrix2, Matrix3x2, SMatrix, Vector3};
 
 const DIM: usize = 3;
@@ -164,6 +165,10 @@ fn ds(x: &[f64], t: &[usize; 3]) -> Matrix3x2<f64> {
 impl Energy for Membrane3dEnergy {
     fn name(&self) -> &str {
         "membrane3d"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

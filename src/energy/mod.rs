@@ -4,6 +4,45 @@
 //! All functions take the flat position vector `x` (`dim` coordinates per vertex) and use the
 //! degree-of-freedom numbering `dim*v + k` of [`crate::scene::mesh`].
 //!
+//! # The terms
+//!
+//! Each term implements [`Energy`]; its module documents its formulas. Where the formulas
+//! allow it a term is one type generic over the dimension `D`, with the per-dimension part
+//! kept as small as possible:
+//!
+//! * [`membrane::TensionString`]`<D>`: tension-only strings and membranes of P1 edges
+//!   ([`MembraneEnergy`] in 2D, [`String3dEnergy`] in 3D);
+//! * [`NeoHookean`]`<D, N>`: compressible neo-Hookean P1 simplices ([`NeoHookean2d`]
+//!   triangles, [`NeoHookean3d`] tetrahedra);
+//! * [`Gas`]`<R>`: the enclosed gas `−C ln V` over a [`gas::Region`] ([`GasEnergy`] over a
+//!   closed polygon's area, [`Gas3dEnergy`] over a closed surface's volume);
+//! * [`Gravity`]`<D>`: gravity on lumped vertex masses;
+//! * [`Membrane3dEnergy`] (St Venant–Kirchhoff triangles in 3D) and [`PressureEnergy`] (a
+//!   pressure load on a closed 2D curve) exist in one dimension only.
+//!
+//! What a term stands for (elastic, potential, inertia) is its [`TermKind`]
+//! ([`Energy::kind`]); [`Energy::name`] is for display only.
+//!
+//! # Adding an energy
+//!
+//! At most three files:
+//!
+//! 1. the new energy's file `src/energy/NAME.rs`: a type implementing [`Energy`] (`kind`,
+//!    `value`, `add_gradient`, `add_hessian` with its element-wise projection), generic over
+//!    the dimension where the formulas allow it, assembled with the helpers below
+//!    ([`chunked_sum`], [`par_scatter`], [`chunked_triplets`], [`push_block`],
+//!    [`project_psd`]) so that it is thread-count independent; its module doc gives the
+//!    formulas, and its tests the finite-difference gradient and Hessian, the projection
+//!    (positive semi-definite), rigid invariance and thread independence (helpers in
+//!    `fd_test.rs`);
+//! 2. this file: `pub mod NAME;` and the `pub use` of the type;
+//! 3. what uses it: the scene builder (`src/scene/`) that pushes it into a scene's
+//!    [`TotalEnergy`], or the scene-file schema (the `[[body]]` keys read by the scene-file
+//!    loader) to offer it in scene files.
+//!
+//! Nothing else needs to know the term: the outer loop, the QP assembly and the dynamic runs
+//! only see a [`TotalEnergy`] and each term's [`TermKind`].
+//!
 //! # Parallelism and determinism
 //!
 //! Assembly is rayon-parallel, and its results are bit-for-bit independent of the number of
@@ -20,27 +59,23 @@
 #[cfg(test)]
 pub(crate) mod fd_test;
 pub mod gas;
-pub mod gas3d;
 pub mod gravity;
-pub mod gravity3d;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
-pub mod neo_hookean3d;
 pub mod pressure;
 pub mod string3d;
 
-pub use gas::GasEnergy;
-pub use gas3d::{Gas3dEnergy, OpenSurface};
+pub use gas::{Gas, Gas3dEnergy, GasEnergy, OpenSurface};
 pub use gravity::Gravity;
-pub use gravity3d::Gravity3d;
 pub use membrane::MembraneEnergy;
 pub use membrane3d::Membrane3dEnergy;
-pub use neo_hookean::NeoHookean2d;
-pub use neo_hookean3d::{DegenerateTet, NeoHookean3d};
+pub use neo_hookean::{DegenerateTet, NeoHookean, NeoHookean2d, NeoHookean3d};
 pub use pressure::PressureEnergy;
 pub use string3d::String3dEnergy;
 
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, DimDiff, DimSub, SMatrix, U1};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -151,6 +186,25 @@ pub(crate) fn push_block(
     }
 }
 
+/// Replaces the symmetric matrix `m` by its positive semi-definite part when it has a negative
+/// eigenvalue (eigendecomposition `m = Q Λ Qᵀ`, then `Q max(Λ, 0) Qᵀ`, symmetrized); leaves it
+/// untouched otherwise. The element-wise projection of the energies whose element Hessians
+/// have no closed-form positive part (neo-Hookean, 3D membrane, 3D gas).
+pub(crate) fn project_psd<const N: usize>(m: &mut SMatrix<f64, N, N>)
+where
+    Const<N>: DimSub<U1>,
+    DefaultAllocator: Allocator<Const<N>, DimDiff<Const<N>, U1>> + Allocator<DimDiff<Const<N>, U1>>,
+{
+    let eig = m.symmetric_eigen();
+    if eig.eigenvalues.min() < 0.0 {
+        let d = eig.eigenvalues.map(|v| v.max(0.0));
+        let p = eig.eigenvectors
+            * SMatrix::<f64, N, N>::from_diagonal(&d)
+            * eig.eigenvectors.transpose();
+        *m = (p + p.transpose()) * 0.5;
+    }
+}
+
 /// A rank-one Hessian term `coef · w wᵀ` (`coef ≥ 0`), kept out of the sparse block so that
 /// `P` stays sparse: the QP assembly turns it into one auxiliary variable `s = w·d` and one
 /// equality row (SPEC §2).
@@ -197,10 +251,25 @@ impl Hessian {
     }
 }
 
+/// What a term of the energy stands for: how a dynamic run books its value
+/// ([`crate::dynamics::StepRecord`]'s `elastic` and `potential`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TermKind {
+    /// Stored energy of the bodies: membranes, strings, neo-Hookean solids, the gas, and the
+    /// pressure load.
+    Elastic,
+    /// Potential energy of an external field: gravity.
+    Potential,
+    /// The inertia term of a time step ([`crate::dynamics::Inertia`]), not part of a scene's J.
+    Inertia,
+}
+
 /// One term of the total energy.
 pub trait Energy: Send + Sync {
-    /// Short name used in outputs.
+    /// Short name, for display only (tables, messages); what the term is is [`Energy::kind`].
     fn name(&self) -> &str;
+    /// The kind of the term.
+    fn kind(&self) -> TermKind;
     /// `J(x)`; `f64::INFINITY` where undefined (inverted triangle, non-positive gas area).
     fn value(&self, x: &[f64]) -> f64;
     /// `g += ∇J(x)`.
@@ -300,6 +369,69 @@ mod tests {
             t
         });
         assert!(t == expected);
+    }
+
+    #[test]
+    fn energy_term_kinds_and_names() {
+        let x2 = [0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+        let x3 = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let tet = vec![[0, 1, 2, 3]];
+        let surface = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let terms: Vec<(Box<dyn Energy>, &str, TermKind)> = vec![
+            (
+                Box::new(MembraneEnergy::new(vec![[0, 1]], &x2, 1.0)),
+                "membrane",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(String3dEnergy::new(vec![[0, 1]], &x3, 1.0)),
+                "string3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Membrane3dEnergy::new(vec![[0, 1, 2]], &x3, 1.0, 1.0)),
+                "membrane3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(NeoHookean2d::new(vec![[0, 1, 2]], &x2, 1.0, 1.0)),
+                "neo_hookean",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(NeoHookean3d::new(tet, &x3, 1.0, 1.0).unwrap()),
+                "neo_hookean3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(GasEnergy::new(vec![0, 1, 2], 1.0, &x2)),
+                "gas",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Gas3dEnergy::new(surface, 1.0, &x3).unwrap()),
+                "gas3d",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(PressureEnergy::new(vec![0, 1, 2], 1.0, &x2)),
+                "pressure",
+                TermKind::Elastic,
+            ),
+            (
+                Box::new(Gravity::new(vec![1.0; 3], [0.0, -1.0])),
+                "gravity",
+                TermKind::Potential,
+            ),
+            (
+                Box::new(Gravity::new(vec![1.0; 4], [0.0, 0.0, -1.0])),
+                "gravity3d",
+                TermKind::Potential,
+            ),
+        ];
+        for (t, name, kind) in terms {
+            assert_eq!((t.name(), t.kind()), (name, kind));
+        }
     }
 
     #[test]

@@ -30,7 +30,7 @@
 //! per-vertex contribution scatter-added in polygon order, the Hessian triplets are produced in
 //! chunks in shoelace-term order; all bit-identical for any thread count.
 
-use super::{chunked_sum, par_scatter, Energy, Hessian};
+use super::{chunked_sum, par_scatter, Energy, Hessian, TermKind};
 
 const DIM: usize = 2;
 
@@ -85,6 +85,10 @@ fn signed_area(polygon: &[usize], x: &[f64]) -> f64 {
 impl Energy for PressureEnergy {
     fn name(&self) -> &str {
         "pressure"
+    }
+
+    fn kind(&self) -> TermKind {
+        TermKind::Elastic
     }
 
     fn value(&self, x: &[f64]) -> f64 {

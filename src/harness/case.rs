@@ -2,6 +2,7 @@
 //! accuracy preset and a pruning mode, then diagnosed. Shared by `contactlab sweep` (one CSV
 //! row per case) and the tests; `contactlab run` builds its scene the same way.
 
+use crate::energy::TermKind;
 use crate::harness::diagnostics::{
     converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
 };
@@ -9,7 +10,7 @@ use crate::scene::dynamic::DynamicScene;
 use crate::scene::Scene;
 use crate::solve::dynamics::{
     lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, DynamicState, PairForce,
-    StepRecord, System, POTENTIAL_TERMS,
+    StepRecord, System,
 };
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use crate::solve::settings::Accuracy;
@@ -237,7 +238,7 @@ pub fn execute_dynamic(
         .energy
         .terms
         .iter()
-        .any(|t| POTENTIAL_TERMS.contains(&t.name()));
+        .any(|t| t.kind() == TermKind::Potential);
     let conserves = !has_potential && !ds.scene.mesh.fixed.iter().any(|&f| f);
     let m = dynamic_metrics(&res, free_mass, conserves);
     Ok((res, m))

@@ -519,7 +519,7 @@ mod tests {
             assert_eq!(pts.len(), f / 2 + 2);
             assert_eq!(unique_edges(&tris).len(), 3 * f / 2);
             assert!(pts.iter().all(|p| (p.norm() - 1.0).abs() < 1e-14));
-            assert_eq!(crate::energy::gas3d::open_edge(&tris), None);
+            assert_eq!(crate::energy::gas::open_edge(&tris), None);
         }
     }
 
@@ -581,8 +581,8 @@ mod tests {
                 .sum();
             assert!(vol > 0.75 * sphere && vol < sphere, "{vol} vs {sphere}");
             let gas = Gas3dEnergy::new(tris.clone(), p.c, &s.x0).unwrap();
-            assert_eq!(gas.triangles(), &tris[..]); // not reversed: already outward
-            assert!((gas.volume(&s.x0) - vol).abs() < 1e-12);
+            assert_eq!(gas.region.triangles(), &tris[..]); // not reversed: already outward
+            assert!((gas.region.volume(&s.x0) - vol).abs() < 1e-12);
             // the pad is one of the balloon's triangles
             let pad: Vec<usize> = m.bodies[b]
                 .vertices

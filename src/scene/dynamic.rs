@@ -18,7 +18,7 @@
 //! and `ε = h/10` by default, `h` the largest reference edge of the moving bodies.
 
 use super::Scene;
-use crate::energy::{Gravity, Gravity3d, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
+use crate::energy::{Gravity, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{count, set_fields, BuiltinScene, Params};
@@ -613,7 +613,7 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
     let mesh = assemble_mesh(3, x.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let density = vec![0.0, p.density];
-    let mut gravity = Gravity3d::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
+    let mut gravity = Gravity::<3>::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
     gravity.add_triangles(&stris, &x, p.density);
     let energy = TotalEnergy {
         terms: vec![

@@ -31,7 +31,7 @@
 //!
 //! **Energy.** `J = Σ_edges L_e W(F_e) + weight · Σ_v m_v z_v`: the tension-only string
 //! energy ([`String3dEnergy`], `W(F) = μ(|F|² − 1)²` for `|F| ≥ 1`) and gravity
-//! ([`Gravity3d`], `weight` = ρg per unit reference length, along −z) on the whole string.
+//! ([`Gravity`], `weight` = ρg per unit reference length, along −z) on the whole string.
 //!
 //! **Defaults.** `n = 2` (17 + 12 + 17 edges, 47 vertices), `μ = 1`, `weight = 0.1`,
 //! `H = 0.3`, `stretch = 1.1`, `slack = 1.2`, `swing_deg = 75`; `h` = the largest reference
@@ -50,7 +50,7 @@
 
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
-use crate::energy::{Gravity3d, String3dEnergy, TotalEnergy};
+use crate::energy::{Gravity, String3dEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
@@ -345,7 +345,7 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
             eps,
         });
     }
-    let mut gravity = Gravity3d::new(vec![0.0; nv], [0.0, 0.0, -1.0]);
+    let mut gravity = Gravity::<3>::new(vec![0.0; nv], [0.0, 0.0, -1.0]);
     gravity.add_edges(&edges, &x_ref, p.weight);
     let energy = TotalEnergy {
         terms: vec![

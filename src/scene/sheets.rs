@@ -19,7 +19,7 @@
 //!   sheet's interior.
 //!
 //! **Energy.** `J = Σ_sheets Σ_T |T_ref| W(F_T) + weight · Σ_{v ∈ upper} m_v z_v`, the StVK
-//! membrane `W = μ|E|² + λ/2 (tr E)²` on both sheets and gravity ([`Gravity3d`], lumped
+//! membrane `W = μ|E|² + λ/2 (tr E)²` on both sheets and gravity ([`Gravity`], lumped
 //! masses, `weight` = ρg per unit REFERENCE area, pointing to −z) on the upper sheet only.
 //! The pre-tension gives both sheets an out-of-plane stiffness at `x0` (a flat unstretched
 //! membrane has none: its Hessian would be singular in z and the linearized problem unbounded
@@ -50,7 +50,7 @@
 
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
-use crate::energy::{Gravity3d, Membrane3dEnergy, TotalEnergy};
+use crate::energy::{Gravity, Membrane3dEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
@@ -320,7 +320,7 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
         p.mu,
         p.lambda,
     )));
-    let mut gravity = Gravity3d::new(vec![0.0; 2 * np], [0.0, 0.0, -1.0]);
+    let mut gravity = Gravity::<3>::new(vec![0.0; 2 * np], [0.0, 0.0, -1.0]);
     gravity.add_triangles(&upper_tris, &x_ref, p.weight);
     energy.terms.push(Box::new(gravity));
     Ok(Scene {

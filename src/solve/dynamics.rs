@@ -50,16 +50,12 @@
 //!   `E_{n+1} ≤ E_n` is not a theorem: it is measured.
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::{Energy, Hessian, TotalEnergy};
+use crate::energy::{Energy, Hessian, TermKind, TotalEnergy};
 use crate::scene::mesh::{BodyKind, Mesh};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::QpBackend;
 use std::time::Instant;
 use thiserror::Error;
-
-/// Names of the energy terms counted as potential (external) energy; every other term of the
-/// scene's J is counted as elastic (membranes, neo-Hookean solids, gas, pressure).
-pub const POTENTIAL_TERMS: [&str; 2] = ["gravity", "gravity3d"];
 
 /// Time-stepping scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -255,6 +251,10 @@ impl Energy for Inertia {
         "inertia"
     }
 
+    fn kind(&self) -> TermKind {
+        TermKind::Inertia
+    }
+
     fn value(&self, x: &[f64]) -> f64 {
         let mut s = 0.0;
         for (v, &m) in self.mass.iter().enumerate() {
@@ -313,9 +313,10 @@ pub struct StepRecord {
     pub time: f64,
     /// `½ Σ m_v |v_v|²`.
     pub kinetic: f64,
-    /// The terms of J that are not [`POTENTIAL_TERMS`].
+    /// The terms of J of kind [`TermKind::Elastic`] (membranes, neo-Hookean solids, gas,
+    /// pressure).
     pub elastic: f64,
-    /// The [`POTENTIAL_TERMS`] of J (gravity).
+    /// The terms of J of kind [`TermKind::Potential`] (gravity).
     pub potential: f64,
     /// kinetic + elastic + potential.
     pub total: f64,
@@ -397,10 +398,10 @@ impl System<'_> {
                 .sum::<f64>();
         let (mut elastic, mut potential) = (0.0, 0.0);
         for t in &self.energy.terms {
-            if POTENTIAL_TERMS.contains(&t.name()) {
-                potential += t.value(x);
-            } else {
-                elastic += t.value(x);
+            match t.kind() {
+                TermKind::Potential => potential += t.value(x),
+                // (the step's inertia term is not among the terms when this is called)
+                TermKind::Elastic | TermKind::Inertia => elastic += t.value(x),
             }
         }
         (kinetic, elastic, potential)

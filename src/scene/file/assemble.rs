@@ -12,8 +12,8 @@ use super::topology::chain;
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
 use crate::energy::{
-    Energy, Gas3dEnergy, GasEnergy, Gravity, Gravity3d, Membrane3dEnergy, MembraneEnergy,
-    NeoHookean2d, NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
+    Energy, Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy, NeoHookean2d,
+    NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
 };
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
@@ -47,7 +47,7 @@ pub(super) struct Header {
 /// load.
 struct Loads {
     mass: Vec<f64>,
-    gravity3: Gravity3d,
+    gravity3: Gravity<3>,
 }
 
 impl Ctx<'_> {
@@ -139,7 +139,7 @@ impl Ctx<'_> {
         let mut energy = TotalEnergy::default();
         let mut loads = Loads {
             mass: vec![0.0; mesh.nv()],
-            gravity3: Gravity3d::new(vec![0.0; mesh.nv()], [0.0; 3]),
+            gravity3: Gravity::<3>::new(vec![0.0; mesh.nv()], [0.0; 3]),
         };
         for (bi, (l, s)) in loaded.iter().zip(specs).enumerate() {
             let els = &body_elements[bi];
@@ -258,7 +258,7 @@ impl Ctx<'_> {
             (BodyKind::Curve, 2) => {
                 let poly = chain(els).map_err(|r| self.invalid(line, &gk, g.c, r))?;
                 let gas = GasEnergy::new(poly, g.c, x0);
-                if gas.area(x0).is_nan() || gas.area(x0) <= 0.0 {
+                if gas.measure(x0).is_nan() || gas.measure(x0) <= 0.0 {
                     return Err(self.invalid(
                         line,
                         gk,
@@ -272,7 +272,7 @@ impl Ctx<'_> {
                 let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
                 let gas = Gas3dEnergy::new(tris, g.c, x0)
                     .map_err(|e| self.invalid(line, &gk, g.c, e.to_string()))?;
-                if gas.volume(x0).is_nan() || gas.volume(x0) <= 0.0 {
+                if gas.measure(x0).is_nan() || gas.measure(x0) <= 0.0 {
                     return Err(self.invalid(
                         line,
                         gk,

@@ -1,8 +1,7 @@
-//! Enclosed-gas energy of an inflated closed surface in 3D (the 3D counterpart of
-//! [`super::gas`]; Pantz 2008, §7: isothermal perfect gas).
+//! The 3D gas region: a closed, consistently oriented surface of P1 triangles
+//! `T = (x_a, x_b, x_c)`, and the volume it encloses.
 //!
-//! The gas fills the volume enclosed by a closed, consistently oriented surface of P1
-//! triangles `T = (x_a, x_b, x_c)`. By the divergence theorem its signed volume is
+//! By the divergence theorem the signed volume is
 //!
 //! ```text
 //! V(x) = Σ_T det(x_a − o, x_b − o, x_c − o) / 6 = Σ_T (x_a − o) · ((x_b − o) × (x_c − o)) / 6,
@@ -15,17 +14,15 @@
 //! `x`: the sums are then translation invariant and well conditioned (with `o = 0`, a body far
 //! from the origin would make `Σ_T x_a · (x_b × x_c)` cancel large terms), and so is the
 //! projected Hessian below (its triangle blocks depend on `y = x − o`). Since `V` does not
-//! depend on `o`, the derivatives are taken with `o` fixed. The gas energy is
+//! depend on `o`, the derivatives are taken with `o` fixed:
 //!
 //! ```text
-//! J(x) = −C ln V(x)     (J = +∞ when V ≤ 0),
-//! ∇J = −C/V ∇V,          ∂V/∂x_a = (y_b × y_c)/6 (and cyclically), y = x − o,
-//! ∇²J = C/V² ∇V ∇Vᵀ − C/V ∇²V.
+//! ∂V/∂x_a = (y_b × y_c)/6 (and cyclically),   y = x − o.
 //! ```
 //!
-//! The first Hessian part is pushed as a [`RankOne`] term (`coef = C/V²`, `w = ∇V`) in both
-//! modes. The second is a sum over the triangles: triangle `T` couples its 9 dofs through the
-//! block `M_T = −C/V ∇²V_T`, whose 3×3 sub-blocks are
+//! The second-derivative part `−C/V ∇²V` of the gas Hessian ([`super`]) is a sum over the
+//! triangles: triangle `T` couples its 9 dofs through the block `M_T = −C/V ∇²V_T`, whose 3×3
+//! sub-blocks are
 //!
 //! ```text
 //! (∇²V_T)_{pq} = ε(p, q, r) [y_r]ₓᵀ / 6   (p ≠ q, r the third corner),   (∇²V_T)_{pp} = 0,
@@ -35,26 +32,24 @@
 //! product matrix (`[y]ₓ z = y × z`). `M_T` has a zero diagonal, so (unless it vanishes) it is
 //! indefinite; with `projected = true` each `M_T` is replaced by its positive semi-definite
 //! part (symmetric eigendecomposition, negative eigenvalues clamped to zero,
-//! [`super::neo_hookean3d::project_psd`]), as [`super::gas`] does with its shoelace blocks.
+//! [`crate::energy::project_psd`]), as [`super::area`] does with its shoelace blocks.
 //!
-//! Assembly follows the conventions of [`super`]: the centroid and the volume are chunked
-//! sums, `∇V` is scatter-added per triangle in triangle order, the Hessian triplets are
-//! produced in chunks in triangle order; all bit-identical for any thread count.
+//! Assembly follows the conventions of [`crate::energy`]: the centroid and the volume are
+//! chunked sums, `∇V` is scatter-added per triangle in triangle order, the Hessian triplets
+//! are produced in chunks in triangle order; all bit-identical for any thread count.
 
-use super::membrane3d::Matrix9;
-use super::neo_hookean3d::project_psd;
-use super::{chunked_sum, chunked_triplets, par_scatter, push_block, Energy, Hessian, RankOne};
+use super::Region;
+use crate::energy::membrane3d::Matrix9;
+use crate::energy::{chunked_sum, chunked_triplets, par_scatter, project_psd, push_block, Hessian};
 use std::collections::HashMap;
 
 const DIM: usize = 3;
 
-/// `−C ln V` for the volume `V` enclosed by a closed triangulated surface (3D).
+/// A closed triangulated surface, oriented so that its volume at construction is positive.
 #[derive(Clone, Debug)]
-pub struct Gas3dEnergy {
+pub struct ClosedSurface {
     /// Triangles, oriented so that the volume at the construction configuration is positive.
     triangles: Vec<[usize; 3]>,
-    /// Gas constant `C` (amount × temperature), `C > 0`.
-    pub c: f64,
     /// The surface's vertices, increasing.
     vertices: Vec<usize>,
     /// The triangles' corners as indices into `vertices`.
@@ -92,13 +87,13 @@ pub struct OpenSurface {
     pub b: usize,
 }
 
-impl Gas3dEnergy {
-    /// Builds the energy, reversing every triangle if the volume at `x0` is negative, so that
+impl ClosedSurface {
+    /// The surface, reversing every triangle if the volume at `x0` is negative, so that
     /// `V(x0) ≥ 0` (outward normals).
     ///
     /// A surface that is not closed and consistently oriented (see [`open_edge`]) is an
     /// error naming the unmatched edge: `V` would not be a volume.
-    pub fn new(triangles: Vec<[usize; 3]>, c: f64, x0: &[f64]) -> Result<Self, OpenSurface> {
+    pub fn new(triangles: Vec<[usize; 3]>, x0: &[f64]) -> Result<Self, OpenSurface> {
         if let Some([a, b]) = open_edge(&triangles) {
             return Err(OpenSurface { a, b });
         }
@@ -108,19 +103,18 @@ impl Gas3dEnergy {
         let pos: HashMap<usize, usize> =
             vertices.iter().enumerate().map(|(l, &v)| (v, l)).collect();
         let local = triangles.iter().map(|t| t.map(|v| pos[&v])).collect();
-        let mut gas = Self {
+        let mut s = Self {
             triangles,
-            c,
             vertices,
             local,
         };
-        if gas.volume(x0) < 0.0 {
-            for (t, l) in gas.triangles.iter_mut().zip(gas.local.iter_mut()) {
+        if s.volume(x0) < 0.0 {
+            for (t, l) in s.triangles.iter_mut().zip(s.local.iter_mut()) {
                 t.swap(1, 2);
                 l.swap(1, 2);
             }
         }
-        Ok(gas)
+        Ok(s)
     }
 
     /// The triangles, in their stored (outward) orientation.
@@ -169,7 +163,7 @@ impl Gas3dEnergy {
     }
 
     /// `∇V(x)` as sparse `(dof, value)` pairs, by increasing vertex (the three dofs of each
-    /// vertex of [`Gas3dEnergy::vertices`] in turn).
+    /// vertex of [`ClosedSurface::vertices`] in turn).
     pub fn volume_gradient(&self, x: &[f64]) -> Vec<(usize, f64)> {
         let o = self.origin(x);
         let mut buf = vec![0.0; DIM * self.vertices.len()];
@@ -239,43 +233,22 @@ fn dot(a: &[f64; DIM], b: &[f64; DIM]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-impl Energy for Gas3dEnergy {
-    fn name(&self) -> &str {
-        "gas3d"
+impl Region for ClosedSurface {
+    const NAME: &'static str = "gas3d";
+
+    fn measure(&self, x: &[f64]) -> f64 {
+        self.volume(x)
     }
 
-    fn value(&self, x: &[f64]) -> f64 {
-        let v = self.volume(x);
-        if v > 0.0 {
-            -self.c * v.ln()
-        } else {
-            f64::INFINITY
-        }
+    fn measure_gradient(&self, x: &[f64]) -> Vec<(usize, f64)> {
+        self.volume_gradient(x)
     }
 
-    /// Adds `−C/V ∇V`; adds nothing when `V ≤ 0` (the energy is `+∞` there).
-    fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
-        let v = self.volume(x);
-        if v <= 0.0 {
-            return;
-        }
-        for (dof, w) in self.volume_gradient(x) {
-            g[dof] -= self.c / v * w;
-        }
-    }
-
-    /// Adds nothing when `V ≤ 0`.
-    fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian) {
-        let v = self.volume(x);
-        if v <= 0.0 {
-            return;
-        }
-        h.rank_one.push(RankOne {
-            coef: self.c / (v * v),
-            w: self.volume_gradient(x),
-        });
+    /// The triangle blocks `−C/V ∇²V_T` (module docs), each projected by eigendecomposition
+    /// if asked.
+    fn add_measure_hessian(&self, x: &[f64], c: f64, v: f64, projected: bool, h: &mut Hessian) {
         let o = self.origin(x);
-        let k = -self.c / v;
+        let k = -c / v;
         chunked_triplets(self.triangles.len(), &mut h.triplets, |t, out| {
             let mut m = self.triangle_block(x, &o, t, k);
             if projected {
@@ -290,6 +263,8 @@ impl Energy for Gas3dEnergy {
 mod tests {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
+    use crate::energy::gas::Gas3dEnergy;
+    use crate::energy::{Energy, TermKind};
     use nalgebra::{Rotation3, Vector3};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -389,22 +364,23 @@ mod tests {
     fn energy_gas3d_orientation_and_known_volumes() {
         let (x, tris) = cube_surface();
         let gas = Gas3dEnergy::new(tris.clone(), 2.0, &x).unwrap();
-        assert_eq!(gas.triangles(), &tris[..]);
-        assert_eq!(gas.vertices(), &(0..8).collect::<Vec<_>>()[..]);
-        assert!((gas.volume(&x) - 1.0).abs() < 1e-15);
+        assert_eq!((gas.name(), gas.kind()), ("gas3d", TermKind::Elastic));
+        assert_eq!(gas.region.triangles(), &tris[..]);
+        assert_eq!(gas.region.vertices(), &(0..8).collect::<Vec<_>>()[..]);
+        assert!((gas.region.volume(&x) - 1.0).abs() < 1e-15);
         assert!(gas.value(&x).abs() < 1e-15);
         // inward-listed: reversed at construction
         let inward: Vec<[usize; 3]> = tris.iter().map(|t| [t[0], t[2], t[1]]).collect();
         let gas = Gas3dEnergy::new(inward.clone(), 2.0, &x).unwrap();
-        assert_eq!(gas.triangles(), &tris[..]);
-        assert!((gas.volume(&x) - 1.0).abs() < 1e-15);
+        assert_eq!(gas.region.triangles(), &tris[..]);
+        assert!((gas.region.volume(&x) - 1.0).abs() < 1e-15);
         // scaled by 2 and translated far away: V = 8, J = −C ln 8
         let y: Vec<f64> = x
             .iter()
             .enumerate()
             .map(|(i, v)| 2.0 * v + 1e3 * (i % 3) as f64)
             .collect();
-        assert!((gas.volume(&y) - 8.0).abs() < 1e-12);
+        assert!((gas.region.volume(&y) - 8.0).abs() < 1e-12);
         assert!((gas.value(&y) + 2.0 * 8f64.ln()).abs() < 1e-12);
         // the regular tetrahedron inscribed in [−1, 1]³: V = 8/3
         let xt = [
@@ -418,7 +394,7 @@ mod tests {
                 tets.clone()
             };
             let gas = Gas3dEnergy::new(t, 1.5, &xt).unwrap();
-            assert!((gas.volume(&xt) - 8.0 / 3.0).abs() < 1e-15);
+            assert!((gas.region.volume(&xt) - 8.0 / 3.0).abs() < 1e-15);
             assert!((gas.value(&xt) + 1.5 * (8.0f64 / 3.0).ln()).abs() < 1e-15);
         }
     }
@@ -459,11 +435,11 @@ mod tests {
             assert!(rel(&g, &gf) <= 1e-5, "rel {}", rel(&g, &gf));
             // volume gradient on its own
             let mut xp = x.clone();
-            for (dof, w) in gas.volume_gradient(&x) {
+            for (dof, w) in gas.region.volume_gradient(&x) {
                 xp[dof] += 1e-6;
-                let vp = gas.volume(&xp);
+                let vp = gas.region.volume(&xp);
                 xp[dof] = x[dof] - 1e-6;
-                let vm = gas.volume(&xp);
+                let vm = gas.region.volume(&xp);
                 xp[dof] = x[dof];
                 assert!(((vp - vm) / 2e-6 - w).abs() <= 1e-8);
             }
@@ -522,7 +498,7 @@ mod tests {
             let z = rot * Vector3::new(q[0], q[1], q[2]) + t;
             p.copy_from_slice(z.as_slice());
         }
-        let (v0, v1) = (gas.volume(&x), gas.volume(&y));
+        let (v0, v1) = (gas.region.volume(&x), gas.region.volume(&y));
         assert!(((v1 - v0) / v0).abs() < 1e-12, "{v0} {v1}");
         let (j0, j1) = (gas.value(&x), gas.value(&y));
         assert!((j1 - j0).abs() < 1e-12 * gas.c.max(j0.abs()), "{j0} {j1}");
@@ -540,7 +516,7 @@ mod tests {
         for k in 0..4 {
             x[3 * k + 2] = -x[3 * k + 2];
         }
-        assert!(g.volume(&x) < 0.0);
+        assert!(g.region.volume(&x) < 0.0);
         assert_eq!(g.value(&x), f64::INFINITY);
         let mut gr = vec![0.0; 12];
         g.add_gradient(&x, &mut gr);
@@ -574,7 +550,7 @@ mod tests {
             let bits = assert_thread_independent(|| term_bits(&gas, &x));
             assert!(f64::from_bits(bits[0]).is_finite());
             let v = 4.0 / 3.0 * std::f64::consts::PI;
-            assert!(((gas.volume(&x) - v) / v).abs() < 0.01);
+            assert!(((gas.region.volume(&x) - v) / v).abs() < 0.01);
         }
     }
 }
