@@ -27,7 +27,7 @@
 //! Hessian is `|T| Σ_{l,n} ∂P_cl/∂F_dn G_al G_bn` at dofs `(3a + c, 3b + d)`. It is indefinite
 //! in compression (a compressed membrane buckles: `S` has a negative eigenvalue); with
 //! `projected = true` each element Hessian's negative eigenvalues are clamped to zero
-//! (symmetric eigendecomposition, [`super::project_psd`]), an element Hessian
+//! (symmetric eigendecomposition, `energy::project_psd`), an element Hessian
 //! that is already positive semi-definite being kept as is.
 //!
 //! The energy is finite everywhere (St Venant–Kirchhoff does not prevent a triangle from

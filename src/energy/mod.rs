@@ -30,8 +30,8 @@
 //! 1. the new energy's file `src/energy/NAME.rs`: a type implementing [`Energy`] (`kind`,
 //!    `value`, `add_gradient`, `add_hessian` with its element-wise projection), generic over
 //!    the dimension where the formulas allow it, assembled with the helpers below
-//!    ([`chunked_sum`], [`par_scatter`], [`chunked_triplets`], [`push_block`],
-//!    [`project_psd`]) so that it is thread-count independent; its module doc gives the
+//!    (`chunked_sum`, `par_scatter`, `chunked_triplets`, `push_block`,
+//!    `project_psd`) so that it is thread-count independent; its module doc gives the
 //!    formulas, and its tests the finite-difference gradient and Hessian, the projection
 //!    (positive semi-definite), rigid invariance and thread independence (helpers in
 //!    `fd_test.rs`);

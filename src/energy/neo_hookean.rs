@@ -22,7 +22,7 @@
 //! `D(D+1) × D(D+1)` element Hessian (6×6 in 2D, 12×12 in 3D) is
 //! `|T| Σ_{l,n} ∂P_cl/∂F_dn G_al G_bn` at dofs `(D·a + c, D·b + d)`. With `projected = true`
 //! each element Hessian's negative eigenvalues are clamped to zero (symmetric
-//! eigendecomposition, [`super::project_psd`]); an element Hessian that is already positive
+//! eigendecomposition, `energy::project_psd`); an element Hessian that is already positive
 //! semi-definite is kept as is.
 //!
 //! Everything per element (`F`, `W`, `P`, `∂P/∂F`, `G`, the projection) is one code for both

@@ -32,7 +32,7 @@
 //! product matrix (`[y]ₓ z = y × z`). `M_T` has a zero diagonal, so (unless it vanishes) it is
 //! indefinite; with `projected = true` each `M_T` is replaced by its positive semi-definite
 //! part (symmetric eigendecomposition, negative eigenvalues clamped to zero,
-//! [`crate::energy::project_psd`]), as [`super::area`] does with its shoelace blocks.
+//! `energy::project_psd`), as [`super::area`] does with its shoelace blocks.
 //!
 //! Assembly follows the conventions of [`crate::energy`]: the centroid and the volume are
 //! chunked sums, `∇V` is scatter-added per triangle in triangle order, the Hessian triplets
