@@ -315,7 +315,7 @@ fn fuzz_point_triangle_no_nan_symmetric_and_matches_sampling() {
 }
 
 #[test]
-fn fuzz_segment_segment_no_nan_symmetric_and_matches_sampling() {
+fn fuzz_edge_edge_no_nan_symmetric_and_matches_sampling() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let pool = [0.5, -0.25, 1.0, 3.0];
     for case in 0..1500 * scale() {
