@@ -52,6 +52,7 @@
 use crate::contact::{ContactPair, PairRows};
 use crate::energy::{Energy, Hessian, TotalEnergy};
 use crate::scene::mesh::{BodyKind, Mesh};
+use crate::solve::observer::{Loop, Observer};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::QpBackend;
 use std::time::Instant;
@@ -457,12 +458,47 @@ pub fn pair_forces(
         .collect()
 }
 
+/// Time stepping as a [`Loop`]: an event is a step's record, pair forces and state, the
+/// outcome the [`DynamicResult`].
+pub struct DynamicLoop;
+
+/// One event of time stepping.
+pub struct StepEvent<'a> {
+    /// The step's record.
+    pub record: &'a StepRecord,
+    /// The forces of every pair of the step's last sub-problem (empty at step 0).
+    pub forces: &'a [PairForce],
+    /// The state after the step.
+    pub state: &'a DynamicState,
+}
+
+impl Loop for DynamicLoop {
+    type Event<'a> = StepEvent<'a>;
+    type Outcome = DynamicResult;
+    fn index(event: &StepEvent<'_>) -> usize {
+        event.record.step
+    }
+}
+
+/// The records, collected.
+impl Observer<DynamicLoop> for Vec<StepRecord> {
+    fn iteration(&mut self, event: &StepEvent<'_>) {
+        self.push(event.record.clone());
+    }
+}
+
+/// A closure `(record, forces, state)` as an observer of time stepping.
+struct FnSteps<'f>(&'f mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState));
+
+impl Observer<DynamicLoop> for FnSteps<'_> {
+    fn iteration(&mut self, event: &StepEvent<'_>) {
+        (self.0)(event.record, event.forces, event.state)
+    }
+}
+
 /// Runs `settings.steps` time steps from `x0` with initial velocity `v0`, calling `observer`
 /// after each step (and once for step 0) with the record, the forces of every pair of the
-/// step's last sub-problem (empty at step 0) and the state. A step whose outer loop ends
-/// `converged`, `max_outer_iterations` or `line_search_failed` is accepted (its status is
-/// recorded); `inadmissible`, `energy_increased` or `subproblem_failed` stop the run.
-/// `system.energy` gets the [`Inertia`] term during the run and is restored afterwards.
+/// step's last sub-problem (empty at step 0) and the state ([`simulate_observed`]).
 pub fn simulate(
     system: &mut System,
     x0: &[f64],
@@ -471,6 +507,32 @@ pub fn simulate(
     outer: &OuterSettings,
     settings: &DynamicSettings,
     observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
+) -> Result<DynamicResult, DynamicsError> {
+    simulate_observed(
+        system,
+        x0,
+        v0,
+        backend,
+        outer,
+        settings,
+        &mut FnSteps(observer),
+    )
+}
+
+/// Runs `settings.steps` time steps from `x0` with initial velocity `v0`, reporting each step
+/// (and step 0) to `observer` ([`Observer::init`] before step 0, [`Observer::finish`] with the
+/// result). A step whose outer loop ends `converged`, `max_outer_iterations` or
+/// `line_search_failed` is accepted (its status is recorded); `inadmissible`,
+/// `energy_increased` or `subproblem_failed` stop the run. `system.energy` gets the
+/// [`Inertia`] term during the run and is restored afterwards.
+pub fn simulate_observed(
+    system: &mut System,
+    x0: &[f64],
+    v0: &[f64],
+    backend: &mut dyn QpBackend,
+    outer: &OuterSettings,
+    settings: &DynamicSettings,
+    observer: &mut dyn Observer<DynamicLoop>,
 ) -> Result<DynamicResult, DynamicsError> {
     settings.validate()?;
     let mesh = system.mesh;
@@ -549,7 +611,12 @@ pub fn simulate(
     let mut records = Vec::with_capacity(settings.steps + 1);
     let mut r0 = record(system, 0, &state);
     r0.min_distance = crate::contact::min_distance(mesh, x0, 2.0 * system.eps, false).distance;
-    observer(&r0, &[], &state);
+    observer.init();
+    observer.iteration(&StepEvent {
+        record: &r0,
+        forces: &[],
+        state: &state,
+    });
     records.push(r0);
     let dt = settings.dt;
     let c = settings.scheme.inertia_weight(dt);
@@ -637,7 +704,11 @@ pub fn simulate(
             rec.outer_iterations = res.outer_iterations;
             rec.status = res.status.as_str();
             rec.wall_time_s = res.wall_time_s;
-            observer(&rec, &forces, &state);
+            observer.iteration(&StepEvent {
+                record: &rec,
+                forces: &forces,
+                state: &state,
+            });
             records.push(rec);
             steps = step;
             if matches!(
@@ -652,13 +723,15 @@ pub fn simulate(
     })();
     system.energy.terms.pop();
     out?;
-    Ok(DynamicResult {
+    let result = DynamicResult {
         state,
         records,
         steps,
         stopped_by,
         wall_time_s: start.elapsed().as_secs_f64(),
-    })
+    };
+    observer.finish(&result);
+    Ok(result)
 }
 
 /// The "no chatter" measurement over a rest window: the total contact force `F_k` of the
