@@ -18,7 +18,8 @@
 //! ```
 //!
 //! with a scheme-dependent predictor `x̃` and weight `c`. The [`Inertia`] term is the first
-//! part of (★); it is appended to the scene's [`TotalEnergy`] and replaced at every step.
+//! part of (★); each step minimises [`WithInertia`], the scene's [`TotalEnergy`] wrapped with
+//! that step's inertia term (evaluated last, as if it were `J`'s last term).
 //! (★) has units of energy, so the QP duals of the step's rows are forces.
 //!
 //! * **Implicit Euler** (the paper's example): `x̃ = x_n + Δt v_n`, `c = 1/Δt²`; after the
@@ -50,7 +51,7 @@
 //!   `E_{n+1} ≤ E_n` is not a theorem: it is measured.
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::{Energy, Hessian, TotalEnergy};
+use crate::energy::{Energy, Hessian, Objective, TotalEnergy};
 use crate::scene::mesh::{BodyKind, Mesh};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
@@ -290,6 +291,31 @@ impl Energy for Inertia {
     }
 }
 
+/// The objective of one time step (★): the scene's `J` plus the [`Inertia`] term, evaluated
+/// with the inertia term last (as if it were `J`'s last term).
+pub struct WithInertia<'a> {
+    /// The scene's `J`.
+    pub energy: &'a TotalEnergy,
+    /// The step's inertia term.
+    pub inertia: Inertia,
+}
+
+impl Objective for WithInertia<'_> {
+    fn value(&self, x: &[f64]) -> f64 {
+        self.energy.value(x) + self.inertia.value(x)
+    }
+    fn gradient(&self, x: &[f64]) -> Vec<f64> {
+        let mut g = self.energy.gradient(x);
+        self.inertia.add_gradient(x, &mut g);
+        g
+    }
+    fn hessian(&self, x: &[f64], projected: bool) -> Hessian {
+        let mut h = self.energy.hessian(x, projected);
+        self.inertia.add_hessian(x, projected, &mut h);
+        h
+    }
+}
+
 /// The contact force of one pair at the end of a step: the sum of its rows' multipliers (QP
 /// duals of the step's last sub-problem), the force along the pair's normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -523,8 +549,8 @@ pub fn simulate(
 /// (and step 0) to `observer` ([`Observer::init`] before step 0, [`Observer::finish`] with the
 /// result). A step whose outer loop ends `converged`, `max_outer_iterations` or
 /// `line_search_failed` is accepted (its status is recorded); `inadmissible`,
-/// `energy_increased` or `subproblem_failed` stop the run. `system.energy` gets the
-/// [`Inertia`] term during the run and is restored afterwards.
+/// `energy_increased` or `subproblem_failed` stop the run. Each step minimises
+/// [`WithInertia`]: `system.energy` is left as it is.
 pub fn simulate_observed(
     system: &mut System,
     x0: &[f64],
@@ -623,12 +649,6 @@ pub fn simulate_observed(
     let margin = outer.inner.margin_rel * system.eps + outer.inner.margin_abs;
     let mut stopped_by = None;
     let mut steps = 0;
-    system.energy.terms.push(Box::new(Inertia {
-        dim: d,
-        mass: system.mass.clone(),
-        c,
-        x_tilde: x0.to_vec(),
-    }));
     let out = (|| -> Result<(), DynamicsError> {
         for step in 1..=settings.steps {
             let x_n = state.x.clone();
@@ -644,17 +664,19 @@ pub fn simulate_observed(
                     }
                 })
                 .collect();
-            system.energy.terms.pop();
-            system.energy.terms.push(Box::new(Inertia {
-                dim: d,
-                mass: system.mass.clone(),
-                c,
-                x_tilde: x_tilde.clone(),
-            }));
+            let objective = WithInertia {
+                energy: system.energy,
+                inertia: Inertia {
+                    dim: d,
+                    mass: system.mass.clone(),
+                    c,
+                    x_tilde: x_tilde.clone(),
+                },
+            };
             let mut admissible = true;
             let res = run(
                 mesh,
-                system.energy,
+                &objective,
                 system.eps,
                 &x_n,
                 backend,
@@ -689,11 +711,8 @@ pub fn simulate_observed(
                 system.eps,
                 margin,
             );
-            // J_step of the record: the terms without the inertia are J, so pop it first
-            let inertia = system.energy.terms.pop().expect("inertia term");
             let mut rec = record(system, step, &state);
             rec.step_energy = res.energy;
-            system.energy.terms.push(inertia);
             rec.min_distance = res.min_distance.distance;
             rec.admissible = admissible;
             rec.active_contacts = forces.iter().filter(|f| f.active).count();
@@ -721,7 +740,6 @@ pub fn simulate_observed(
         }
         Ok(())
     })();
-    system.energy.terms.pop();
     out?;
     let result = DynamicResult {
         state,

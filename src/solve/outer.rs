@@ -11,7 +11,7 @@ use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
     PairRows,
 };
-use crate::energy::TotalEnergy;
+use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
@@ -349,7 +349,7 @@ impl Observer<OuterLoop> for FnOuter<'_> {
 /// Runs the outer loop from `x0`, calling `observer` with every record and iterate.
 pub fn run(
     mesh: &Mesh,
-    energy: &TotalEnergy,
+    energy: &dyn Objective,
     eps: f64,
     x0: &[f64],
     backend: &mut dyn QpBackend,
@@ -371,7 +371,7 @@ pub fn run(
 /// is checked, [`Observer::finish`] with the result).
 pub fn run_observed(
     mesh: &Mesh,
-    energy: &TotalEnergy,
+    energy: &dyn Objective,
     eps: f64,
     x0: &[f64],
     backend: &mut dyn QpBackend,
