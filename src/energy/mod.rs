@@ -280,6 +280,30 @@ pub trait Energy: Send + Sync {
     fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian);
 }
 
+/// What the solver minimises ([`crate::solve::outer::run`]): `J`'s value, gradient and
+/// (projected) Hessian. [`TotalEnergy`] is one; time stepping wraps it with its inertia term
+/// (`crate::solve::dynamics`).
+pub trait Objective {
+    /// `J(x)`.
+    fn value(&self, x: &[f64]) -> f64;
+    /// `∇J(x)`.
+    fn gradient(&self, x: &[f64]) -> Vec<f64>;
+    /// The (projected) Hessian.
+    fn hessian(&self, x: &[f64], projected: bool) -> Hessian;
+}
+
+impl Objective for TotalEnergy {
+    fn value(&self, x: &[f64]) -> f64 {
+        TotalEnergy::value(self, x)
+    }
+    fn gradient(&self, x: &[f64]) -> Vec<f64> {
+        TotalEnergy::gradient(self, x)
+    }
+    fn hessian(&self, x: &[f64], projected: bool) -> Hessian {
+        TotalEnergy::hessian(self, x, projected)
+    }
+}
+
 /// Sum of energy terms.
 #[derive(Default)]
 pub struct TotalEnergy {

@@ -9,9 +9,9 @@ use crate::harness::diagnostics::{
 use crate::scene::dynamic::DynamicScene;
 use crate::scene::Scene;
 use crate::solve::dynamics::{
-    lumped_mass, rest_force, simulate, DynamicResult, DynamicSettings, DynamicState, PairForce,
-    StepRecord, System,
+    lumped_mass, rest_force, simulate_observed, DynamicLoop, DynamicResult, DynamicSettings, System,
 };
+use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use crate::solve::settings::Accuracy;
 use anyhow::Result;
@@ -213,7 +213,7 @@ pub fn execute_dynamic(
     cs: &CaseSettings,
     dyn_settings: &DynamicSettings,
     qp: &QpSettings,
-    observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
+    observer: &mut dyn Observer<DynamicLoop>,
 ) -> Result<(DynamicResult, DynamicMetrics)> {
     let mut backend = backend_from_name(&cs.backend, qp)?;
     let settings = outer_settings(cs);
@@ -224,7 +224,7 @@ pub fn execute_dynamic(
         eps: ds.scene.eps,
         mass,
     };
-    let res = simulate(
+    let res = simulate_observed(
         &mut system,
         &ds.scene.x0,
         &ds.v0,

@@ -16,29 +16,18 @@
 
 use crate::harness::case::{self, CaseSettings, DynamicMetrics};
 use crate::harness::run::{validate_cli, RunArgs};
+use crate::output::run_dir::{Contacts, DynamicProgress, Frames, History, RunDir};
 use crate::output::svg::write_svg;
 use crate::output::timeseries::{timeseries_svg, Line};
-use crate::output::vtk::{write_vtu, PvdSeries};
 use crate::output::write_atomic;
 use crate::scene::dynamic::DynamicScene;
 use crate::scene::registry;
-use crate::solve::dynamics::{DynamicSettings, PairForce, Scheme, StepRecord};
+use crate::solve::dynamics::{DynamicLoop, DynamicSettings, Scheme, StepRecord};
+use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::OuterSettings;
 use crate::solve::settings::RunSettings;
 use anyhow::{bail, Context, Result};
-use std::io::Write;
 use std::path::PathBuf;
-
-#[derive(serde::Serialize)]
-struct ContactRow {
-    step: usize,
-    time: f64,
-    kind: &'static str,
-    first: usize,
-    second: usize,
-    force: f64,
-    distance: f64,
-}
 
 #[derive(serde::Serialize)]
 struct DynamicSummary {
@@ -159,7 +148,7 @@ pub fn run_dynamic_file(
 /// The stepping and the run directory, shared by the built-in scenes and the scene files.
 /// `weight_g`: `|g|` when the contact-force plot gets the free bodies' weight `m g`.
 // The flags (`a`: output, frames, progress) and the run settings (`rs`: a scene file's
-// `[solver]` already merged) are both needed; the run-directory observers will take `a`'s share.
+// `[solver]` already merged) are both needed.
 #[allow(clippy::too_many_arguments)]
 fn run_prepared(
     a: &RunArgs,
@@ -190,85 +179,31 @@ fn run_prepared(
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("runs/{label}-dynamic-{}", scheme.as_str())));
-    let frames = out.join("frames");
-    std::fs::create_dir_all(&frames)
-        .with_context(|| format!("cannot create run directory {}", frames.display()))?;
-    let mut hist = csv::Writer::from_path(out.join("history.csv"))?;
-    let mut contacts = csv::Writer::from_path(out.join("contacts.csv"))?;
-    let mut pvd = PvdSeries::default();
-    let mut records: Vec<StepRecord> = Vec::new();
-    let mut io_err: Option<anyhow::Error> = None;
     let mesh = ds.scene.mesh.clone();
     let dim = mesh.dim;
     let eps = ds.scene.eps;
-    let every = a.frame_every.max(1);
-    let mut observer = |rec: &StepRecord,
-                        forces: &[PairForce],
-                        st: &crate::solve::dynamics::DynamicState| {
-        records.push(rec.clone());
-        let mut step = || -> Result<()> {
-            hist.serialize(rec)?;
-            hist.flush()?;
-            for f in forces.iter().filter(|f| f.active) {
-                let (first, second) = f.pair.indices();
-                contacts.serialize(ContactRow {
-                    step: rec.step,
-                    time: rec.time,
-                    kind: f.pair.kind(),
-                    first,
-                    second,
-                    force: f.force,
-                    distance: f.distance,
-                })?;
-            }
-            contacts.flush()?;
-            if rec.step.is_multiple_of(every) || rec.step == steps {
-                let speed: Vec<f64> =
-                    st.v.chunks(dim)
-                        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
-                        .collect();
-                let name = format!("frame_{:05}.vtu", rec.step);
-                let tris = if dim == 3 {
-                    &mesh.faces
-                } else {
-                    &mesh.triangles
-                };
-                write_vtu(
-                    &frames.join(&name),
-                    dim,
-                    &st.x,
-                    &mesh.edges,
-                    tris,
-                    &mesh.tets,
-                    &[("speed", &speed)],
-                )?;
-                pvd.push(rec.time, format!("frames/{name}"));
-                pvd.write(&out.join("frames.pvd"))?;
-            }
-            Ok(())
-        };
-        if let Err(e) = step() {
-            io_err.get_or_insert(e);
-        }
-        if !a.quiet {
-            eprint!(
-                "\r[{} {}] step {:>5}/{steps} t = {:.4}  E = {:.8e}  K = {:.3e}  min dist/eps = {:.5}  contacts {:>4}  F = {:.4e}  outer {:>4} {}   ",
-                scheme.as_str(), rs.backend, rec.step, rec.time, rec.total, rec.kinetic, rec.min_distance / eps, rec.active_contacts, rec.contact_force, rec.outer_iterations, rec.status
-            );
-            let _ = std::io::stderr().flush();
-        }
+    let mut frames = EveryK {
+        k: a.frame_every,
+        last: Some(steps),
+        inner: Frames::create(&out, &mesh)?,
     };
-    let (res, metrics) = case::execute_dynamic(&mut ds, &cs, &dyn_settings, &qps, &mut observer)?;
-    #[allow(clippy::drop_non_drop)] // ends the closure's borrows
-    drop(observer);
+    let mut hist = History::create(&out.join("history.csv"))?;
+    let mut contacts = Contacts::create(&out.join("contacts.csv"))?;
+    let mut records: Vec<StepRecord> = Vec::new();
+    let mut progress = DynamicProgress {
+        scheme: scheme.as_str(),
+        backend: rs.backend.clone(),
+        steps,
+        eps,
+    };
+    let mut files = RunDir::<DynamicLoop>::new(vec![&mut hist, &mut contacts, &mut frames]);
+    let mut observers: Vec<&mut dyn Observer<DynamicLoop>> = vec![&mut records, &mut files];
     if !a.quiet {
-        eprintln!();
+        observers.push(&mut progress);
     }
-    if let Some(e) = io_err {
-        return Err(e.context("writing the run directory"));
-    }
-    hist.flush()?;
-    contacts.flush()?;
+    let (res, metrics) =
+        case::execute_dynamic(&mut ds, &cs, &dyn_settings, &qps, &mut Fanout(observers))?;
+    files.into_result()?;
     let weight = weight_g.map(|g| metrics.free_mass * g);
     // pictures
     let series = |f: fn(&StepRecord) -> f64| -> Vec<(f64, f64)> {

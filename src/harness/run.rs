@@ -9,17 +9,18 @@
 use crate::contact::near_pairs;
 use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use crate::harness::{case, dynamic_run};
+use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
-use crate::output::vtk::{write_vtu, PvdSeries};
+use crate::output::vtk::write_vtu;
 use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
-use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunStatus};
+use crate::solve::observer::{EveryK, Fanout, Observer};
+use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Clone)]
@@ -390,91 +391,40 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("runs/{}-default", scene.name)));
-    let frames = out.join("frames");
-    std::fs::create_dir_all(&frames)
-        .with_context(|| format!("cannot create run directory {}", frames.display()))?;
     let mesh = &scene.mesh;
-    let mut hist = csv::Writer::from_path(out.join("history.csv"))?;
-    let mut pvd = PvdSeries::default();
-    let mut energies: Vec<(usize, f64)> = Vec::new();
-    let mut snapshots: Vec<(usize, Vec<f64>)> = Vec::new();
-    let mut monotone = true;
-    let mut admissible = true;
-    let mut last_frame = 0usize;
-    let mut io_err: Option<anyhow::Error> = None;
-    let quiet = a.quiet;
-    let eps = scene.eps;
-    let mut observer = |rec: &IterationRecord, x: &[f64]| {
-        if let Some(&(_, jprev)) = energies.last() {
-            monotone &= rec.energy <= jprev;
-        }
-        admissible &= rec.admissible;
-        energies.push((rec.iteration, rec.energy));
-        snapshots.push((rec.iteration, x.to_vec()));
-        let mut step = || -> Result<()> {
-            hist.serialize(rec)?;
-            hist.flush()?;
-            if rec.iteration.is_multiple_of(a.frame_every.max(1)) {
-                let name = format!("frame_{:05}.vtu", rec.iteration);
-                write_vtu(
-                    &frames.join(&name),
-                    mesh.dim,
-                    x,
-                    &mesh.edges,
-                    vtk_triangles(mesh),
-                    &mesh.tets,
-                    &[],
-                )?;
-                pvd.push(rec.iteration as f64, format!("frames/{name}"));
-                pvd.write(&out.join("frames.pvd"))?;
-                last_frame = rec.iteration;
-            }
-            Ok(())
-        };
-        if let Err(e) = step() {
-            io_err.get_or_insert(e);
-        }
-        if !quiet {
-            eprint!(
-                "\r[{} {}] outer {:>4}  J = {:.10e}  min dist/eps = {:.6}  rows {:>7} active {:>4}  qp {} it {:>6}   ",
-                rs.backend, rs.pruning.as_str(), rec.iteration, rec.energy, rec.min_distance / eps, rec.rows, rec.active_rows, rec.qp_status, rec.backend_iterations
-            );
-            let _ = std::io::stderr().flush();
-        }
+    let mut frames = EveryK {
+        k: a.frame_every,
+        last: None,
+        inner: Frames::create(&out, mesh)?,
     };
-    let res = run(
+    let mut hist = History::create(&out.join("history.csv"))?;
+    let mut trace = Trace::default();
+    let mut progress = StaticProgress {
+        backend: rs.backend.clone(),
+        pruning: rs.pruning.as_str(),
+        eps: scene.eps,
+    };
+    let mut files = RunDir::<OuterLoop>::new(vec![&mut hist, &mut frames]);
+    let mut observers: Vec<&mut dyn Observer<OuterLoop>> = vec![&mut trace, &mut files];
+    if !a.quiet {
+        observers.push(&mut progress);
+    }
+    let res = run_observed(
         mesh,
         &scene.energy,
         scene.eps,
         &scene.x0,
         backend.as_mut(),
         &settings,
-        &mut observer,
+        &mut Fanout(observers),
     )?;
-    #[allow(clippy::drop_non_drop)] // ends the closure's borrows of io_err, hist, pvd
-    drop(observer);
-    if !quiet {
-        eprintln!();
-    }
-    if let Some(e) = io_err {
-        return Err(e.context("writing the run directory"));
-    }
-    hist.flush()?;
-    drop(hist);
-    if last_frame != res.outer_iterations {
-        let name = format!("frame_{:05}.vtu", res.outer_iterations);
-        write_vtu(
-            &frames.join(&name),
-            mesh.dim,
-            &res.x,
-            &mesh.edges,
-            vtk_triangles(mesh),
-            &mesh.tets,
-            &[],
-        )?;
-        pvd.push(res.outer_iterations as f64, format!("frames/{name}"));
-        pvd.write(&out.join("frames.pvd"))?;
-    }
+    files.into_result()?;
+    let Trace {
+        energies,
+        snapshots,
+        monotone,
+        admissible,
+    } = trace;
     // The state the run returns, its last admissible iterate, whatever the status (after an
     // inadmissible or energy-increasing step the last frame is that step's iterate).
     write_vtu(
@@ -623,6 +573,41 @@ fn drawn_faces(mesh: &crate::scene::mesh::Mesh) -> Vec<[usize; 3]> {
         .filter(|b| b.vertices.iter().any(|&v| !mesh.fixed[v]))
         .flat_map(|b| b.faces.iter().map(|&f| mesh.faces[f]))
         .collect()
+}
+
+/// What a static run keeps of its iterates for the summary and the figures.
+struct Trace {
+    /// `(iteration, J)` per record.
+    energies: Vec<(usize, f64)>,
+    /// `(iteration, iterate)` per record.
+    snapshots: Vec<(usize, Vec<f64>)>,
+    /// No record's J above the one before.
+    monotone: bool,
+    /// Every record admissible.
+    admissible: bool,
+}
+
+impl Default for Trace {
+    fn default() -> Self {
+        Self {
+            energies: Vec::new(),
+            snapshots: Vec::new(),
+            monotone: true,
+            admissible: true,
+        }
+    }
+}
+
+impl Observer<OuterLoop> for Trace {
+    fn iteration(&mut self, event: &OuterEvent<'_>) {
+        let rec = event.record;
+        if let Some(&(_, jprev)) = self.energies.last() {
+            self.monotone &= rec.energy <= jprev;
+        }
+        self.admissible &= rec.admissible;
+        self.energies.push((rec.iteration, rec.energy));
+        self.snapshots.push((rec.iteration, event.x.to_vec()));
+    }
 }
 
 /// The triangles a VTK frame shows: the solid elements in 2D, the contact faces in 3D (the

@@ -748,13 +748,7 @@ fn run_one_dynamic(spec: &RunSpec) -> DynamicRow {
             steps: d.steps,
             scheme: d.scheme,
         };
-        let (_, mt) = case::execute_dynamic(
-            &mut ds,
-            &spec.settings,
-            &dyn_settings,
-            &qp,
-            &mut |_, _, _| {},
-        )?;
+        let (_, mt) = case::execute_dynamic(&mut ds, &spec.settings, &dyn_settings, &qp, &mut ())?;
         let g = matches!(spec.scene.as_str(), "drop" | "drop3d")
             .then(|| spec.params.get("g").copied().unwrap_or(9.81));
         Ok(DynamicRow::of_metrics(

@@ -7,6 +7,7 @@
 
 pub mod loglog;
 pub mod plot;
+pub mod run_dir;
 pub mod svg;
 pub mod timeseries;
 pub mod vtk;

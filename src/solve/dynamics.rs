@@ -18,7 +18,8 @@
 //! ```
 //!
 //! with a scheme-dependent predictor `x̃` and weight `c`. The [`Inertia`] term is the first
-//! part of (★); it is appended to the scene's [`TotalEnergy`] and replaced at every step.
+//! part of (★); each step minimises [`WithInertia`], the scene's [`TotalEnergy`] wrapped with
+//! that step's inertia term (evaluated last, as if it were `J`'s last term).
 //! (★) has units of energy, so the QP duals of the step's rows are forces.
 //!
 //! * **Implicit Euler** (the paper's example): `x̃ = x_n + Δt v_n`, `c = 1/Δt²`; after the
@@ -50,8 +51,9 @@
 //!   `E_{n+1} ≤ E_n` is not a theorem: it is measured.
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::{Energy, Hessian, TermKind, TotalEnergy};
+use crate::energy::{Energy, Hessian, Objective, TermKind, TotalEnergy};
 use crate::scene::mesh::{BodyKind, Mesh};
+use crate::solve::observer::{Loop, Observer};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::QpBackend;
 use std::time::Instant;
@@ -289,6 +291,31 @@ impl Energy for Inertia {
     }
 }
 
+/// The objective of one time step (★): the scene's `J` plus the [`Inertia`] term, evaluated
+/// with the inertia term last (as if it were `J`'s last term).
+pub struct WithInertia<'a> {
+    /// The scene's `J`.
+    pub energy: &'a TotalEnergy,
+    /// The step's inertia term.
+    pub inertia: Inertia,
+}
+
+impl Objective for WithInertia<'_> {
+    fn value(&self, x: &[f64]) -> f64 {
+        self.energy.value(x) + self.inertia.value(x)
+    }
+    fn gradient(&self, x: &[f64]) -> Vec<f64> {
+        let mut g = self.energy.gradient(x);
+        self.inertia.add_gradient(x, &mut g);
+        g
+    }
+    fn hessian(&self, x: &[f64], projected: bool) -> Hessian {
+        let mut h = self.energy.hessian(x, projected);
+        self.inertia.add_hessian(x, projected, &mut h);
+        h
+    }
+}
+
 /// The contact force of one pair at the end of a step: the sum of its rows' multipliers (QP
 /// duals of the step's last sub-problem), the force along the pair's normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -458,12 +485,47 @@ pub fn pair_forces(
         .collect()
 }
 
+/// Time stepping as a [`Loop`]: an event is a step's record, pair forces and state, the
+/// outcome the [`DynamicResult`].
+pub struct DynamicLoop;
+
+/// One event of time stepping.
+pub struct StepEvent<'a> {
+    /// The step's record.
+    pub record: &'a StepRecord,
+    /// The forces of every pair of the step's last sub-problem (empty at step 0).
+    pub forces: &'a [PairForce],
+    /// The state after the step.
+    pub state: &'a DynamicState,
+}
+
+impl Loop for DynamicLoop {
+    type Event<'a> = StepEvent<'a>;
+    type Outcome = DynamicResult;
+    fn index(event: &StepEvent<'_>) -> usize {
+        event.record.step
+    }
+}
+
+/// The records, collected.
+impl Observer<DynamicLoop> for Vec<StepRecord> {
+    fn iteration(&mut self, event: &StepEvent<'_>) {
+        self.push(event.record.clone());
+    }
+}
+
+/// A closure `(record, forces, state)` as an observer of time stepping.
+struct FnSteps<'f>(&'f mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState));
+
+impl Observer<DynamicLoop> for FnSteps<'_> {
+    fn iteration(&mut self, event: &StepEvent<'_>) {
+        (self.0)(event.record, event.forces, event.state)
+    }
+}
+
 /// Runs `settings.steps` time steps from `x0` with initial velocity `v0`, calling `observer`
 /// after each step (and once for step 0) with the record, the forces of every pair of the
-/// step's last sub-problem (empty at step 0) and the state. A step whose outer loop ends
-/// `converged`, `max_outer_iterations` or `line_search_failed` is accepted (its status is
-/// recorded); `inadmissible`, `energy_increased` or `subproblem_failed` stop the run.
-/// `system.energy` gets the [`Inertia`] term during the run and is restored afterwards.
+/// step's last sub-problem (empty at step 0) and the state ([`simulate_observed`]).
 pub fn simulate(
     system: &mut System,
     x0: &[f64],
@@ -472,6 +534,32 @@ pub fn simulate(
     outer: &OuterSettings,
     settings: &DynamicSettings,
     observer: &mut dyn FnMut(&StepRecord, &[PairForce], &DynamicState),
+) -> Result<DynamicResult, DynamicsError> {
+    simulate_observed(
+        system,
+        x0,
+        v0,
+        backend,
+        outer,
+        settings,
+        &mut FnSteps(observer),
+    )
+}
+
+/// Runs `settings.steps` time steps from `x0` with initial velocity `v0`, reporting each step
+/// (and step 0) to `observer` ([`Observer::init`] before step 0, [`Observer::finish`] with the
+/// result). A step whose outer loop ends `converged`, `max_outer_iterations` or
+/// `line_search_failed` is accepted (its status is recorded); `inadmissible`,
+/// `energy_increased` or `subproblem_failed` stop the run. Each step minimises
+/// [`WithInertia`]: `system.energy` is left as it is.
+pub fn simulate_observed(
+    system: &mut System,
+    x0: &[f64],
+    v0: &[f64],
+    backend: &mut dyn QpBackend,
+    outer: &OuterSettings,
+    settings: &DynamicSettings,
+    observer: &mut dyn Observer<DynamicLoop>,
 ) -> Result<DynamicResult, DynamicsError> {
     settings.validate()?;
     let mesh = system.mesh;
@@ -550,19 +638,18 @@ pub fn simulate(
     let mut records = Vec::with_capacity(settings.steps + 1);
     let mut r0 = record(system, 0, &state);
     r0.min_distance = crate::contact::min_distance(mesh, x0, 2.0 * system.eps, false).distance;
-    observer(&r0, &[], &state);
+    observer.init();
+    observer.iteration(&StepEvent {
+        record: &r0,
+        forces: &[],
+        state: &state,
+    });
     records.push(r0);
     let dt = settings.dt;
     let c = settings.scheme.inertia_weight(dt);
     let margin = outer.inner.margin_rel * system.eps + outer.inner.margin_abs;
     let mut stopped_by = None;
     let mut steps = 0;
-    system.energy.terms.push(Box::new(Inertia {
-        dim: d,
-        mass: system.mass.clone(),
-        c,
-        x_tilde: x0.to_vec(),
-    }));
     let out = (|| -> Result<(), DynamicsError> {
         for step in 1..=settings.steps {
             let x_n = state.x.clone();
@@ -578,17 +665,19 @@ pub fn simulate(
                     }
                 })
                 .collect();
-            system.energy.terms.pop();
-            system.energy.terms.push(Box::new(Inertia {
-                dim: d,
-                mass: system.mass.clone(),
-                c,
-                x_tilde: x_tilde.clone(),
-            }));
+            let objective = WithInertia {
+                energy: system.energy,
+                inertia: Inertia {
+                    dim: d,
+                    mass: system.mass.clone(),
+                    c,
+                    x_tilde: x_tilde.clone(),
+                },
+            };
             let mut admissible = true;
             let res = run(
                 mesh,
-                system.energy,
+                &objective,
                 system.eps,
                 &x_n,
                 backend,
@@ -623,11 +712,8 @@ pub fn simulate(
                 system.eps,
                 margin,
             );
-            // J_step of the record: the terms without the inertia are J, so pop it first
-            let inertia = system.energy.terms.pop().expect("inertia term");
             let mut rec = record(system, step, &state);
             rec.step_energy = res.energy;
-            system.energy.terms.push(inertia);
             rec.min_distance = res.min_distance.distance;
             rec.admissible = admissible;
             rec.active_contacts = forces.iter().filter(|f| f.active).count();
@@ -638,7 +724,11 @@ pub fn simulate(
             rec.outer_iterations = res.outer_iterations;
             rec.status = res.status.as_str();
             rec.wall_time_s = res.wall_time_s;
-            observer(&rec, &forces, &state);
+            observer.iteration(&StepEvent {
+                record: &rec,
+                forces: &forces,
+                state: &state,
+            });
             records.push(rec);
             steps = step;
             if matches!(
@@ -651,15 +741,16 @@ pub fn simulate(
         }
         Ok(())
     })();
-    system.energy.terms.pop();
     out?;
-    Ok(DynamicResult {
+    let result = DynamicResult {
         state,
         records,
         steps,
         stopped_by,
         wall_time_s: start.elapsed().as_secs_f64(),
-    })
+    };
+    observer.finish(&result);
+    Ok(result)
 }
 
 /// The "no chatter" measurement over a rest window: the total contact force `F_k` of the

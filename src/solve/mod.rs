@@ -1,8 +1,9 @@
 //! Solving: the sub-problem `min J over T(ψ)` by Newton-type steps and a QP backend
 //! ([`subproblem`]), the outer loop of §3 ([`outer`]), time stepping of §6 ([`dynamics`]) and
-//! the accuracy presets ([`settings`]).
+//! the accuracy presets ([`settings`]); both loops report to [`observer`]s.
 
 pub mod dynamics;
+pub mod observer;
 pub mod outer;
 pub mod settings;
 pub mod subproblem;

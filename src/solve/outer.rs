@@ -1,8 +1,9 @@
 //! The outer loop of §3: `φ_{k+1} = argmin { J(φ) : φ ∈ T(φ_k) }`, stopped when
 //! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (docs/method.md).
 //!
-//! The loop never prints: it emits one [`IterationRecord`] per outer step to an observer
-//! callback, which writes CSV, frames or a progress line.
+//! The loop never prints: it emits one [`IterationRecord`] per outer step to an
+//! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
+//! frames or a progress line.
 
 use crate::contact::broad_phase::point_edge_near;
 use crate::contact::MinDistance;
@@ -10,8 +11,9 @@ use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
     PairRows,
 };
-use crate::energy::TotalEnergy;
+use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
+use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
@@ -315,15 +317,66 @@ fn lazy_oracle<'a>(
     }
 }
 
-/// Runs the outer loop from `x0`.
+/// The outer loop as a [`Loop`]: an event is an iterate and its record, the outcome the
+/// [`RunResult`].
+pub struct OuterLoop;
+
+/// One event of the outer loop.
+pub struct OuterEvent<'a> {
+    /// The step's record.
+    pub record: &'a IterationRecord,
+    /// The step's iterate (the sub-problem's solution, admissible or not).
+    pub x: &'a [f64],
+}
+
+impl Loop for OuterLoop {
+    type Event<'a> = OuterEvent<'a>;
+    type Outcome = RunResult;
+    fn index(event: &OuterEvent<'_>) -> usize {
+        event.record.iteration
+    }
+}
+
+/// A closure `(record, iterate)` as an observer of the outer loop.
+struct FnOuter<'f>(&'f mut dyn FnMut(&IterationRecord, &[f64]));
+
+impl Observer<OuterLoop> for FnOuter<'_> {
+    fn iteration(&mut self, event: &OuterEvent<'_>) {
+        (self.0)(event.record, event.x)
+    }
+}
+
+/// Runs the outer loop from `x0`, calling `observer` with every record and iterate.
 pub fn run(
     mesh: &Mesh,
-    energy: &TotalEnergy,
+    energy: &dyn Objective,
     eps: f64,
     x0: &[f64],
     backend: &mut dyn QpBackend,
     settings: &OuterSettings,
     observer: &mut dyn FnMut(&IterationRecord, &[f64]),
+) -> Result<RunResult, RunError> {
+    run_observed(
+        mesh,
+        energy,
+        eps,
+        x0,
+        backend,
+        settings,
+        &mut FnOuter(observer),
+    )
+}
+
+/// Runs the outer loop from `x0`, reporting to `observer` ([`Observer::init`] once the start
+/// is checked, [`Observer::finish`] with the result).
+pub fn run_observed(
+    mesh: &Mesh,
+    energy: &dyn Objective,
+    eps: f64,
+    x0: &[f64],
+    backend: &mut dyn QpBackend,
+    settings: &OuterSettings,
+    observer: &mut dyn Observer<OuterLoop>,
 ) -> Result<RunResult, RunError> {
     if !(eps > 0.0 && eps.is_finite()) {
         return Err(RunError::BadEps(eps));
@@ -365,8 +418,9 @@ pub fn run(
     let mut delta = settings.trust.delta0 * hbar;
     let mut d_prev = hbar;
     let t_pairs0 = t0.elapsed().as_secs_f64();
-    observer(
-        &IterationRecord {
+    observer.init();
+    observer.iteration(&OuterEvent {
+        record: &IterationRecord {
             iteration: 0,
             energy: jx,
             min_distance: md0.distance,
@@ -383,8 +437,8 @@ pub fn run(
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
         },
-        &x,
-    );
+        x: &x,
+    });
     let mut result = RunResult {
         x: Vec::new(),
         status: RunStatus::MaxOuterIterations,
@@ -473,8 +527,8 @@ pub fn run(
                     .count()
             })
             .sum();
-        observer(
-            &IterationRecord {
+        observer.iteration(&OuterEvent {
+            record: &IterationRecord {
                 iteration: k,
                 energy: sub.energy,
                 min_distance: md.distance,
@@ -495,8 +549,8 @@ pub fn run(
                 t_assembly_s: sub.t_assembly_s,
                 t_solve_s: sub.t_solve_s,
             },
-            &sub.y,
-        );
+            x: &sub.y,
+        });
         if md.distance < eps - roundoff {
             result.status = RunStatus::Inadmissible;
             result.min_distance = md;
@@ -552,5 +606,6 @@ pub fn run(
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();
+    observer.finish(&result);
     Ok(result)
 }

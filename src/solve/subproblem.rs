@@ -23,7 +23,7 @@
 //!   exact rows `≥ ε` of T(ψ).
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::TotalEnergy;
+use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
@@ -159,7 +159,7 @@ pub fn row_offsets(rows: &[PairRows]) -> (Vec<usize>, usize) {
 #[allow(clippy::too_many_arguments)]
 pub fn build_qp(
     mesh: &Mesh,
-    energy: &TotalEnergy,
+    energy: &dyn Objective,
     dofs: &DofMap,
     rows: &[PairRows],
     y: &[f64],
@@ -265,7 +265,7 @@ pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PairRows]) -> Vec<PairRows>
 #[allow(clippy::too_many_arguments)]
 pub fn solve_subproblem(
     mesh: &Mesh,
-    energy: &TotalEnergy,
+    energy: &dyn Objective,
     dofs: &DofMap,
     rows: Vec<PairRows>,
     start: &[f64],
