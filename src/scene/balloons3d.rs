@@ -41,7 +41,7 @@ use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gas3dEnergy, Membrane3dEnergy, OpenSurface, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
-use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
+use crate::scene::registry::{set_fields, LevelScene, Params};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
 use thiserror::Error;
@@ -443,65 +443,52 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
     })
 }
 
-/// The parameters of [`Balloons3d`] at level `n` with ε, set from `NAME=VALUE` pairs.
-fn registry_params(
-    n: usize,
-    eps: Option<f64>,
-    params: &Params,
-) -> anyhow::Result<Balloons3dParams> {
-    let mut p = Balloons3dParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "balloons3d",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("c", |p| &mut p.c),
-            ("radius", |p| &mut p.radius),
-            ("pad_gap", |p| &mut p.pad_gap),
-            ("twist_deg", |p| &mut p.twist_deg),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
 /// The `balloons3d` scene in the scene registry: its parameters are the numeric fields of
 /// [`Balloons3dParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
 pub struct Balloons3d;
 
-impl BuiltinScene for Balloons3d {
-    fn name(&self) -> &'static str {
-        "balloons3d"
+impl LevelScene for Balloons3d {
+    type P = Balloons3dParams;
+    const NAME: &'static str = "balloons3d";
+    const MAX_LEVEL: usize = 7;
+
+    fn params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Balloons3dParams> {
+        let mut p = Balloons3dParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        set_fields(
+            "balloons3d",
+            &mut p,
+            params,
+            &[
+                ("mu", |p| &mut p.mu),
+                ("lambda", |p| &mut p.lambda),
+                ("c", |p| &mut p.c),
+                ("radius", |p| &mut p.radius),
+                ("pad_gap", |p| &mut p.pad_gap),
+                ("twist_deg", |p| &mut p.twist_deg),
+            ],
+            &[],
+        )?;
+        Ok(p)
     }
 
-    fn default_n(&self) -> usize {
-        Balloons3dParams::default().n
+    fn level(p: &Balloons3dParams) -> usize {
+        p.n
     }
 
-    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
-        Ok(build(&registry_params(n, eps, params)?)?)
+    fn at_level(p: &Balloons3dParams, n: usize) -> Balloons3dParams {
+        Balloons3dParams { n, ..p.clone() }
     }
 
-    fn params_json(
-        &self,
-        n: usize,
-        eps: Option<f64>,
-        params: &Params,
-    ) -> anyhow::Result<Option<serde_json::Value>> {
-        Ok(Some(serde_json::to_value(registry_params(
-            n, eps, params,
-        )?)?))
+    fn build_scene(p: &Balloons3dParams) -> anyhow::Result<Scene> {
+        Ok(build(p)?)
     }
 
-    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
-        let base = registry_params(1, None, params)?;
-        first_level(h, 7, |n| mesh_size(&Balloons3dParams { n, ..base.clone() }))
+    fn mesh_size(p: &Balloons3dParams) -> f64 {
+        mesh_size(p)
     }
 }
 

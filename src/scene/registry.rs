@@ -99,6 +99,58 @@ pub trait BuiltinScene: Sync {
     }
 }
 
+/// A built-in scene given by a parameter struct with a mesh level `n` (the 3D scenes): its
+/// parameters are the struct's fields set by name, its level for a mesh size h the coarsest
+/// level up to [`LevelScene::MAX_LEVEL`] whose mesh size is at most h. Every such type is a
+/// [`BuiltinScene`] through the implementation below.
+pub trait LevelScene: Sync {
+    /// The parameter struct.
+    type P: Clone + Default + serde::Serialize;
+    /// The scene's name.
+    const NAME: &'static str;
+    /// The finest level [`BuiltinScene::n_for_h`] tries.
+    const MAX_LEVEL: usize;
+    /// The parameters at level `n` with ε (`None`: the scene's default) and `NAME=VALUE`
+    /// pairs, unknown names an error naming them.
+    fn params(n: usize, eps: Option<f64>, params: &Params) -> Result<Self::P>;
+    /// The level of `p`.
+    fn level(p: &Self::P) -> usize;
+    /// `p` at level `n`.
+    fn at_level(p: &Self::P, n: usize) -> Self::P;
+    /// The scene of `p`.
+    fn build_scene(p: &Self::P) -> Result<Scene>;
+    /// The mesh size h of `p`.
+    fn mesh_size(p: &Self::P) -> f64;
+}
+
+impl<T: LevelScene> BuiltinScene for T {
+    fn name(&self) -> &'static str {
+        T::NAME
+    }
+
+    fn default_n(&self) -> usize {
+        T::level(&T::P::default())
+    }
+
+    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> Result<Scene> {
+        T::build_scene(&T::params(n, eps, params)?)
+    }
+
+    fn params_json(
+        &self,
+        n: usize,
+        eps: Option<f64>,
+        params: &Params,
+    ) -> Result<Option<serde_json::Value>> {
+        Ok(Some(serde_json::to_value(T::params(n, eps, params)?)?))
+    }
+
+    fn n_for_h(&self, h: f64, params: &Params) -> Result<usize> {
+        let base = T::params(1, None, params)?;
+        first_level(h, T::MAX_LEVEL, |n| T::mesh_size(&T::at_level(&base, n)))
+    }
+}
+
 /// Every built-in scene: 2D `balloons`, `ring`; 3D `sheets`, `rod`, `solids`, `balloons3d`;
 /// dynamic only: 2D `drop`, `collide`, 3D `drop3d`. The order is the order of the error
 /// messages' lists.

@@ -53,7 +53,7 @@ use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity, String3dEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
-use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
+use crate::scene::registry::{set_fields, LevelScene, Params};
 use thiserror::Error;
 
 /// Stretch of every upper-strand edge in `x0` (in tension, so the Hessian has no zero
@@ -363,61 +363,52 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
     })
 }
 
-/// The parameters of [`Rod`] at level `n` with ε, set from `NAME=VALUE` pairs.
-fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<RodParams> {
-    let mut p = RodParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "rod",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("weight", |p| &mut p.weight),
-            ("height", |p| &mut p.height),
-            ("stretch", |p| &mut p.stretch),
-            ("slack", |p| &mut p.slack),
-            ("swing_deg", |p| &mut p.swing_deg),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
 /// The `rod` scene in the scene registry: its parameters are the numeric fields of
 /// [`RodParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
 pub struct Rod;
 
-impl BuiltinScene for Rod {
-    fn name(&self) -> &'static str {
-        "rod"
+impl LevelScene for Rod {
+    type P = RodParams;
+    const NAME: &'static str = "rod";
+    const MAX_LEVEL: usize = 100000;
+
+    fn params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<RodParams> {
+        let mut p = RodParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        set_fields(
+            "rod",
+            &mut p,
+            params,
+            &[
+                ("mu", |p| &mut p.mu),
+                ("weight", |p| &mut p.weight),
+                ("height", |p| &mut p.height),
+                ("stretch", |p| &mut p.stretch),
+                ("slack", |p| &mut p.slack),
+                ("swing_deg", |p| &mut p.swing_deg),
+            ],
+            &[],
+        )?;
+        Ok(p)
     }
 
-    fn default_n(&self) -> usize {
-        RodParams::default().n
+    fn level(p: &RodParams) -> usize {
+        p.n
     }
 
-    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
-        Ok(build(&registry_params(n, eps, params)?)?)
+    fn at_level(p: &RodParams, n: usize) -> RodParams {
+        RodParams { n, ..p.clone() }
     }
 
-    fn params_json(
-        &self,
-        n: usize,
-        eps: Option<f64>,
-        params: &Params,
-    ) -> anyhow::Result<Option<serde_json::Value>> {
-        Ok(Some(serde_json::to_value(registry_params(
-            n, eps, params,
-        )?)?))
+    fn build_scene(p: &RodParams) -> anyhow::Result<Scene> {
+        Ok(build(p)?)
     }
 
-    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
-        let base = registry_params(1, None, params)?;
-        first_level(h, 100000, |n| mesh_size(&RodParams { n, ..base.clone() }))
+    fn mesh_size(p: &RodParams) -> f64 {
+        mesh_size(p)
     }
 }
 

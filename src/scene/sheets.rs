@@ -53,7 +53,7 @@ use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity, Membrane3dEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
-use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
+use crate::scene::registry::{set_fields, LevelScene, Params};
 use thiserror::Error;
 
 /// Parameters of the sheets scene.
@@ -333,63 +333,54 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     })
 }
 
-/// The parameters of [`Sheets`] at level `n` with ε, set from `NAME=VALUE` pairs.
-fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SheetsParams> {
-    let mut p = SheetsParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "sheets",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("weight", |p| &mut p.weight),
-            ("gap", |p| &mut p.gap),
-            ("half_size", |p| &mut p.half_size),
-            ("angle_deg", |p| &mut p.angle_deg),
-            ("stretch_lower", |p| &mut p.stretch_lower),
-            ("stretch_upper", |p| &mut p.stretch_upper),
-        ],
-        &[("lower_fixed", |p| &mut p.lower_fixed)],
-    )?;
-    Ok(p)
-}
-
 /// The `sheets` scene in the scene registry: its parameters are the numeric fields of
 /// [`SheetsParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
 pub struct Sheets;
 
-impl BuiltinScene for Sheets {
-    fn name(&self) -> &'static str {
-        "sheets"
+impl LevelScene for Sheets {
+    type P = SheetsParams;
+    const NAME: &'static str = "sheets";
+    const MAX_LEVEL: usize = 1000;
+
+    fn params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SheetsParams> {
+        let mut p = SheetsParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        set_fields(
+            "sheets",
+            &mut p,
+            params,
+            &[
+                ("mu", |p| &mut p.mu),
+                ("lambda", |p| &mut p.lambda),
+                ("weight", |p| &mut p.weight),
+                ("gap", |p| &mut p.gap),
+                ("half_size", |p| &mut p.half_size),
+                ("angle_deg", |p| &mut p.angle_deg),
+                ("stretch_lower", |p| &mut p.stretch_lower),
+                ("stretch_upper", |p| &mut p.stretch_upper),
+            ],
+            &[("lower_fixed", |p| &mut p.lower_fixed)],
+        )?;
+        Ok(p)
     }
 
-    fn default_n(&self) -> usize {
-        SheetsParams::default().n
+    fn level(p: &SheetsParams) -> usize {
+        p.n
     }
 
-    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
-        Ok(build(&registry_params(n, eps, params)?)?)
+    fn at_level(p: &SheetsParams, n: usize) -> SheetsParams {
+        SheetsParams { n, ..p.clone() }
     }
 
-    fn params_json(
-        &self,
-        n: usize,
-        eps: Option<f64>,
-        params: &Params,
-    ) -> anyhow::Result<Option<serde_json::Value>> {
-        Ok(Some(serde_json::to_value(registry_params(
-            n, eps, params,
-        )?)?))
+    fn build_scene(p: &SheetsParams) -> anyhow::Result<Scene> {
+        Ok(build(p)?)
     }
 
-    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
-        let base = registry_params(1, None, params)?;
-        first_level(h, 1000, |n| mesh_size(&SheetsParams { n, ..base.clone() }))
+    fn mesh_size(p: &SheetsParams) -> f64 {
+        mesh_size(p)
     }
 }
 

@@ -41,7 +41,7 @@ use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
-use crate::scene::registry::{first_level, set_fields, BuiltinScene, Params};
+use crate::scene::registry::{set_fields, LevelScene, Params};
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use thiserror::Error;
@@ -337,62 +337,53 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
     })
 }
 
-/// The parameters of [`Solids`] at level `n` with ε, set from `NAME=VALUE` pairs.
-fn registry_params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SolidsParams> {
-    let mut p = SolidsParams {
-        n,
-        eps,
-        ..Default::default()
-    };
-    set_fields(
-        "solids",
-        &mut p,
-        params,
-        &[
-            ("mu", |p| &mut p.mu),
-            ("lambda", |p| &mut p.lambda),
-            ("angle_deg", |p| &mut p.angle_deg),
-            ("upper_size", |p| &mut p.upper_size),
-            ("overlap", |p| &mut p.overlap),
-            ("gap", |p| &mut p.gap),
-            ("contrast", |p| &mut p.contrast),
-        ],
-        &[],
-    )?;
-    Ok(p)
-}
-
 /// The `solids` scene in the scene registry: its parameters are the numeric fields of
 /// [`SolidsParams`]; the level for a mesh size h is the smallest whose [`mesh_size`] is at most h.
 pub struct Solids;
 
-impl BuiltinScene for Solids {
-    fn name(&self) -> &'static str {
-        "solids"
+impl LevelScene for Solids {
+    type P = SolidsParams;
+    const NAME: &'static str = "solids";
+    const MAX_LEVEL: usize = 200;
+
+    fn params(n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<SolidsParams> {
+        let mut p = SolidsParams {
+            n,
+            eps,
+            ..Default::default()
+        };
+        set_fields(
+            "solids",
+            &mut p,
+            params,
+            &[
+                ("mu", |p| &mut p.mu),
+                ("lambda", |p| &mut p.lambda),
+                ("angle_deg", |p| &mut p.angle_deg),
+                ("upper_size", |p| &mut p.upper_size),
+                ("overlap", |p| &mut p.overlap),
+                ("gap", |p| &mut p.gap),
+                ("contrast", |p| &mut p.contrast),
+            ],
+            &[],
+        )?;
+        Ok(p)
     }
 
-    fn default_n(&self) -> usize {
-        SolidsParams::default().n
+    fn level(p: &SolidsParams) -> usize {
+        p.n
     }
 
-    fn build(&self, n: usize, eps: Option<f64>, params: &Params) -> anyhow::Result<Scene> {
-        Ok(build(&registry_params(n, eps, params)?)?)
+    fn at_level(p: &SolidsParams, n: usize) -> SolidsParams {
+        SolidsParams { n, ..p.clone() }
     }
 
-    fn params_json(
-        &self,
-        n: usize,
-        eps: Option<f64>,
-        params: &Params,
-    ) -> anyhow::Result<Option<serde_json::Value>> {
-        Ok(Some(serde_json::to_value(registry_params(
-            n, eps, params,
-        )?)?))
+    fn build_scene(p: &SolidsParams) -> anyhow::Result<Scene> {
+        Ok(build(p)?)
     }
 
-    fn n_for_h(&self, h: f64, params: &Params) -> anyhow::Result<usize> {
-        let base = registry_params(1, None, params)?;
-        first_level(h, 200, |n| mesh_size(&SolidsParams { n, ..base.clone() }))
+    fn mesh_size(p: &SolidsParams) -> f64 {
+        mesh_size(p)
     }
 }
 
