@@ -37,7 +37,7 @@ use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::mesh::Mesh;
 use contactlab::scene::Scene;
 use contactlab::solve::outer::median_edge_length;
-use contactlab::solve::subproblem::{build_qp, DofMap, InnerSettings};
+use contactlab::solve::subproblem::{build_qp, DofMap, InnerSettings, ModelShift};
 use criterion::{
     black_box, criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };
@@ -194,6 +194,7 @@ fn benches(c: &mut Criterion) {
                     f.eps_qp,
                     None,
                     &settings,
+                    &mut ModelShift::default(),
                 )
                 .expect("QP assembly")
             })

@@ -40,6 +40,7 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         tol_j: None,
         max_outer: 2000,
         max_inner: None,
+        newton_model: Default::default(),
         time_limit_s: None,
     };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();

@@ -99,6 +99,10 @@ impl<R: Region> Energy for Gas<R> {
         TermKind::Elastic
     }
 
+    fn exact_in_model(&self) -> bool {
+        true
+    }
+
     fn value(&self, x: &[f64]) -> f64 {
         let v = self.region.measure(x);
         if v > 0.0 {

@@ -278,6 +278,62 @@ pub trait Energy: Send + Sync {
     /// `projected = true` every element's contribution is replaced by its positive
     /// semi-definite part (what the QP uses).
     fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian);
+    /// Whether the Newton model ([`HessianModel::Shifted`]) takes this term's exact Hessian.
+    /// True for the terms of a global measure (the gas term, the pressure load), whose split
+    /// into shoelace or triangle blocks is not a split into elements: projecting each block
+    /// adds a stiffness `~ C/V` per vertex that does not scale with the mesh, while the force
+    /// per vertex does (docs/method.md, the Newton model). False (the default) for the terms
+    /// of elements (strings, membranes, solids), whose element-wise projection is kept.
+    fn exact_in_model(&self) -> bool {
+        false
+    }
+}
+
+/// Which Hessian the inner steps' quadratic model uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HessianModel {
+    /// The exact Hessian of every term (tests, finite differences); may be indefinite.
+    Exact,
+    /// Every element block replaced by its positive semi-definite part, including the gas and
+    /// pressure terms' blocks: always PSD, but over-stiff in the gas' global modes.
+    Projected,
+    /// Element terms projected, global-measure terms ([`Energy::exact_in_model`]) exact; the
+    /// sub-problem makes the model positive definite with an adaptive shift `σI` checked by
+    /// an inertia test (`crate::solve::subproblem`). The default.
+    #[default]
+    Shifted,
+}
+
+impl HessianModel {
+    /// Name used in settings, CSV and JSON.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            HessianModel::Exact => "exact",
+            HessianModel::Projected => "projected",
+            HessianModel::Shifted => "shifted",
+        }
+    }
+
+    /// Parses [`HessianModel::as_str`].
+    pub fn from_name(s: &str) -> Option<HessianModel> {
+        [
+            HessianModel::Exact,
+            HessianModel::Projected,
+            HessianModel::Shifted,
+        ]
+        .into_iter()
+        .find(|m| m.as_str() == s)
+    }
+
+    /// Whether `term`'s blocks are projected under this model.
+    pub fn projects(&self, term: &dyn Energy) -> bool {
+        match self {
+            HessianModel::Exact => false,
+            HessianModel::Projected => true,
+            HessianModel::Shifted => !term.exact_in_model(),
+        }
+    }
 }
 
 /// What the solver minimises ([`crate::solve::outer::run`]): `J`'s value, gradient and
@@ -288,8 +344,11 @@ pub trait Objective {
     fn value(&self, x: &[f64]) -> f64;
     /// `∇J(x)`.
     fn gradient(&self, x: &[f64]) -> Vec<f64>;
-    /// The (projected) Hessian.
-    fn hessian(&self, x: &[f64], projected: bool) -> Hessian;
+    /// The Hessian of the given model.
+    fn hessian(&self, x: &[f64], model: HessianModel) -> Hessian;
+    /// Whether every term's Hessian under `model` is positive semi-definite by construction
+    /// (every term projected), so that no shift is needed.
+    fn model_is_psd(&self, model: HessianModel) -> bool;
 }
 
 impl Objective for TotalEnergy {
@@ -299,8 +358,11 @@ impl Objective for TotalEnergy {
     fn gradient(&self, x: &[f64]) -> Vec<f64> {
         TotalEnergy::gradient(self, x)
     }
-    fn hessian(&self, x: &[f64], projected: bool) -> Hessian {
-        TotalEnergy::hessian(self, x, projected)
+    fn hessian(&self, x: &[f64], model: HessianModel) -> Hessian {
+        TotalEnergy::model_hessian(self, x, model)
+    }
+    fn model_is_psd(&self, model: HessianModel) -> bool {
+        self.terms.iter().all(|t| model.projects(t.as_ref()))
     }
 }
 
@@ -329,6 +391,14 @@ impl TotalEnergy {
         let mut h = Hessian::default();
         for t in &self.terms {
             t.add_hessian(x, projected, &mut h);
+        }
+        h
+    }
+    /// The Hessian of `model`, term by term ([`HessianModel::projects`]).
+    pub fn model_hessian(&self, x: &[f64], model: HessianModel) -> Hessian {
+        let mut h = Hessian::default();
+        for t in &self.terms {
+            t.add_hessian(x, model.projects(t.as_ref()), &mut h);
         }
         h
     }

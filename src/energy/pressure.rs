@@ -91,6 +91,10 @@ impl Energy for PressureEnergy {
         TermKind::Elastic
     }
 
+    fn exact_in_model(&self) -> bool {
+        true
+    }
+
     fn value(&self, x: &[f64]) -> f64 {
         self.p * self.area(x)
     }

@@ -2,7 +2,7 @@
 //! accuracy preset and a pruning mode, then diagnosed. Shared by `contactlab sweep` (one CSV
 //! row per case) and the tests; `contactlab run` builds its scene the same way.
 
-use crate::energy::TermKind;
+use crate::energy::{HessianModel, TermKind};
 use crate::harness::diagnostics::{
     converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
 };
@@ -37,6 +37,8 @@ pub struct CaseSettings {
     /// Wall-time limit of the run in seconds (`None`: none); a run that reaches it ends with
     /// status `time_limit` and its last admissible iterate.
     pub time_limit_s: Option<f64>,
+    /// The inner steps' Newton model.
+    pub newton_model: HessianModel,
 }
 
 /// A finished case.
@@ -106,6 +108,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     if let Some(k) = cs.max_inner {
         settings.inner.max_inner = k;
     }
+    settings.inner.hessian_model = cs.newton_model;
     settings
 }
 

@@ -173,6 +173,7 @@ fn run_prepared(
         max_outer: rs.max_outer,
         max_inner: Some(rs.max_inner),
         time_limit_s: None,
+        newton_model: rs.hessian_model,
     };
     let qps = rs.qp_settings();
     let out = a

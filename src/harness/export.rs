@@ -69,6 +69,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         tol_j: None,
         max_outer: a.max_outer,
         max_inner: None,
+        newton_model: Default::default(),
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -7,6 +7,7 @@
 //! input, inadmissible start, a violated guarantee), 101 a panic.
 
 use crate::contact::near_pairs;
+use crate::energy::HessianModel;
 use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
 use crate::harness::{case, dynamic_run};
 use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
@@ -71,6 +72,11 @@ pub struct RunArgs {
     /// Do not warm-start the QP duals (OSQP, Uzawa; Clarabel never warm-starts).
     #[arg(long)]
     pub no_warm_start: bool,
+    /// Hessian of the inner steps' quadratic model: shifted (element terms projected, gas and
+    /// pressure exact, an adaptive shift; the default) or projected (every element block
+    /// projected, the previous model). docs/method.md, "The Newton model".
+    #[arg(long, default_value = "shifted", value_parser = parse_newton_model)]
+    pub newton_model: HessianModel,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -126,6 +132,15 @@ fn backend_help() -> String {
 fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
     Accuracy::from_name(s)
         .ok_or_else(|| format!("--accuracy {s:?}: expected one of low, default, high"))
+}
+
+fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
+    match HessianModel::from_name(s) {
+        Some(m) if m != HessianModel::Exact => Ok(m),
+        _ => Err(format!(
+            "--newton-model {s:?}: expected one of shifted, projected"
+        )),
+    }
 }
 
 fn parse_pruning(s: &str) -> Result<Pruning, String> {
@@ -254,6 +269,7 @@ impl RunArgs {
             trust_delta0: self.trust_delta0,
             warm_start: !self.no_warm_start,
             time_limit_s: self.time_limit,
+            hessian_model: self.newton_model,
         }
     }
 }

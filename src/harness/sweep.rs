@@ -13,6 +13,7 @@
 //!   message in `error`, never an abort of the sweep;
 //! - a sweep that ends with every run present rewrites its CSV in the sweep file's order.
 
+use crate::energy::HessianModel;
 use crate::harness::case::{self, CaseSettings};
 use crate::harness::diagnostics::h1_distance;
 use crate::harness::rows::{
@@ -186,6 +187,8 @@ pub struct Common {
     pub max_inner: Option<usize>,
     /// Wall-time limit per run in seconds (status `time_limit` when reached; static runs only).
     pub time_limit_s: Option<f64>,
+    /// The inner steps' Newton model: `shifted` (default) or `projected`.
+    pub newton_model: Option<String>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -381,6 +384,7 @@ struct BlockSettings {
     max_outer: usize,
     max_inner: Option<usize>,
     time_limit_s: Option<f64>,
+    newton_model: Option<HessianModel>,
     reference: Option<ReferenceSpec>,
 }
 
@@ -411,6 +415,16 @@ impl BlockSettings {
         let max_outer = c.max_outer.or(defaults.max_outer).unwrap_or(2000);
         let max_inner = c.max_inner.or(defaults.max_inner);
         let time_limit_s = c.time_limit_s.or(defaults.time_limit_s);
+        let newton_model = match c.newton_model.as_ref().or(defaults.newton_model.as_ref()) {
+            None => None,
+            Some(m) => Some(
+                HessianModel::from_name(m)
+                    .filter(|m| *m != HessianModel::Exact)
+                    .with_context(|| {
+                        format!("{at}: newton_model {m:?}: expected shifted or projected")
+                    })?,
+            ),
+        };
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -476,6 +490,7 @@ impl BlockSettings {
             max_outer,
             max_inner,
             time_limit_s,
+            newton_model,
             reference,
         })
     }
@@ -501,6 +516,7 @@ impl BlockSettings {
             max_outer: self.max_outer,
             max_inner: self.max_inner,
             time_limit_s: self.time_limit_s,
+            newton_model: self.newton_model.unwrap_or_default(),
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -520,12 +536,13 @@ impl BlockSettings {
 }
 
 /// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
-/// backend, accuracy, pruning, tol_J, max_outer, then max_inner and the time limit only when
-/// set, so that the keys of sweeps without them stay as they were.
+/// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit and a Newton
+/// model other than the default only when set, so that the keys of sweeps without them stay as
+/// they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -540,7 +557,12 @@ fn run_key(spec: &RunSpec) -> String {
         s.max_outer,
         s.max_inner.map_or(String::new(), |k| format!("|inner={k}")),
         s.time_limit_s
-            .map_or(String::new(), |t| format!("|limit={t:?}s"))
+            .map_or(String::new(), |t| format!("|limit={t:?}s")),
+        if s.newton_model == HessianModel::default() {
+            String::new()
+        } else {
+            format!("|model={}", s.newton_model.as_str())
+        }
     )
 }
 
@@ -780,6 +802,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         tol_j: Some(r.tol_j),
         max_outer: spec.settings.max_outer.max(10_000),
         max_inner: None,
+        newton_model: Default::default(),
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,

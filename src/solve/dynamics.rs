@@ -51,7 +51,7 @@
 //!   `E_{n+1} ≤ E_n` is not a theorem: it is measured.
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::{Energy, Hessian, Objective, TermKind, TotalEnergy};
+use crate::energy::{Energy, Hessian, HessianModel, Objective, TermKind, TotalEnergy};
 use crate::scene::mesh::{BodyKind, Mesh};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
@@ -309,10 +309,15 @@ impl Objective for WithInertia<'_> {
         self.inertia.add_gradient(x, &mut g);
         g
     }
-    fn hessian(&self, x: &[f64], projected: bool) -> Hessian {
-        let mut h = self.energy.hessian(x, projected);
-        self.inertia.add_hessian(x, projected, &mut h);
+    fn hessian(&self, x: &[f64], model: HessianModel) -> Hessian {
+        let mut h = self.energy.model_hessian(x, model);
+        self.inertia
+            .add_hessian(x, model.projects(&self.inertia), &mut h);
         h
+    }
+    fn model_is_psd(&self, model: HessianModel) -> bool {
+        // The inertia term is a positive diagonal.
+        self.energy.model_is_psd(model)
     }
 }
 

@@ -306,12 +306,29 @@ fn lazy_oracle<'a>(
             let dmax = disp.iter().fold(0.0f64, |m, &d| m.max(d));
             near_pairs(mesh, psi, eps_qp + 2.0 * dmax * (1.0 + 1e-12), true)
         };
-        let added: Vec<PairRows> = candidates
+        let violated: Vec<PairRows> = candidates
             .par_iter()
             .filter(|p| !carried.contains(p))
             .filter_map(|&p| pair_rows(mesh, psi, p))
             .filter(|r| r.min_value(phi) < eps_qp)
             .collect();
+        // Per point (or first edge), only the most violated pair: the QP solved again with
+        // these moves the point, and the oracle is asked again about the next point found.
+        let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
+        for (i, r) in violated.iter().enumerate() {
+            let key = match r.pair {
+                ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
+                ContactPair::EdgeEdge { a, .. } => usize::MAX / 2 + a,
+            };
+            let v = r.min_value(phi);
+            let e = best.entry(key).or_insert((v, i));
+            if v < e.0 || (v == e.0 && i < e.1) {
+                *e = (v, i);
+            }
+        }
+        let mut pick: Vec<usize> = best.into_values().map(|(_, i)| i).collect();
+        pick.sort_unstable();
+        let added: Vec<PairRows> = pick.into_iter().map(|i| violated[i]).collect();
         carried.extend(added.iter().map(|r| r.pair));
         added
     }

@@ -17,6 +17,7 @@
 //! [`contactlab_solvers::registry`]); `default` is each backend's measured default
 //! ([`contactlab_solvers::default_settings`]).
 
+use crate::energy::HessianModel;
 use crate::solve::outer::{OuterSettings, Pruning, TrustSettings};
 use contactlab_solvers::{default_settings, preset_tolerances, QpSettings, BACKEND_NAMES};
 use thiserror::Error;
@@ -111,6 +112,8 @@ pub struct RunSettings {
     pub warm_start: bool,
     /// Wall-time limit of a static run in seconds (> 0; `None`: none).
     pub time_limit_s: Option<f64>,
+    /// The Hessian of the inner steps' quadratic model.
+    pub hessian_model: HessianModel,
 }
 
 impl Default for RunSettings {
@@ -128,6 +131,7 @@ impl Default for RunSettings {
             trust_delta0: outer.trust.delta0,
             warm_start: outer.inner.warm_start,
             time_limit_s: outer.time_limit_s,
+            hessian_model: outer.inner.hessian_model,
         }
     }
 }
@@ -245,6 +249,7 @@ impl RunSettings {
         };
         settings.inner.max_inner = self.max_inner;
         settings.inner.warm_start = self.warm_start;
+        settings.inner.hessian_model = self.hessian_model;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

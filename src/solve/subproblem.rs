@@ -23,8 +23,9 @@
 //!   exact rows `≥ ε` of T(ψ).
 
 use crate::contact::{ContactPair, PairRows};
-use crate::energy::Objective;
+use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
+use contactlab_solvers::linalg::{LdlSymbolic, SparseLdl};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -51,6 +52,8 @@ pub struct InnerSettings {
     /// start at 0), and across outer steps by pair identity. Used by OSQP and Uzawa; Clarabel
     /// ignores it. The primal guess is always `d = 0`.
     pub warm_start: bool,
+    /// The Hessian of the quadratic model ([`HessianModel`]; [`ModelShift`] for `shifted`).
+    pub hessian_model: HessianModel,
 }
 
 impl Default for InnerSettings {
@@ -64,7 +67,84 @@ impl Default for InnerSettings {
             margin_abs: 1e-11,
             max_halvings: 40,
             warm_start: true,
+            hessian_model: HessianModel::default(),
         }
+    }
+}
+
+/// The adaptive shift of the Newton model [`HessianModel::Shifted`].
+///
+/// The model's Hessian `H` (element terms projected, the gas and pressure terms exact) can be
+/// indefinite; a backend needs `P ⪰ 0`. The shift is the smallest `σ` of the grid
+/// `{0} ∪ {σ₀·4ᵏ}` (`σ₀ = 1e-8 · max diag H`) for which `H + ρI + σI` has a Cholesky
+/// factorization, searched from a quarter of the previous step's `σ` (so it falls back to
+/// 0 where `H` is positive definite near the solution, and the steps become Newton steps).
+/// Because `σ ≥ |λ_min(H)|` is set by the most negative mode only, which for a gas is a global
+/// mode with curvature `O(C/(V·N))`, the shift does not add the `~C/V` stiffness per vertex of
+/// an element-wise projection. The rank-one terms `c wwᵀ` are then weakened to
+/// `max(1e-6·c, c − σ/‖w‖²)`, so that along `w` (the direction of the negative mode of a gas
+/// term's `−C/V ∇²V`) the model is exact again: the model is `∇²J + σ(I − Σ ŵŵᵀ)` when the
+/// `w` have disjoint supports.
+#[derive(Clone, Debug, Default)]
+pub struct ModelShift {
+    /// The last shift chosen.
+    pub sigma: f64,
+    /// Largest shift chosen so far.
+    pub max_sigma: f64,
+    /// Cholesky factorizations tried.
+    pub factorizations: usize,
+    sym: Option<LdlSymbolic>,
+}
+
+impl ModelShift {
+    /// The shift for the free-dof upper triplets `ptrip` (every diagonal entry present).
+    fn choose(
+        &mut self,
+        nf: usize,
+        ptrip: &[(usize, usize, f64)],
+        maxdiag: f64,
+    ) -> Result<f64, QpError> {
+        let mut m = CscMatrix::from_triplets(nf, nf, ptrip)?;
+        let diag: Vec<usize> = (0..nf)
+            .map(|j| {
+                (m.colptr[j]..m.colptr[j + 1])
+                    .find(|&p| m.rowval[p] == j)
+                    .expect("the proximal term puts every diagonal entry in the pattern")
+            })
+            .collect();
+        let base: Vec<f64> = diag.iter().map(|&p| m.nzval[p]).collect();
+        if !self.sym.as_ref().is_some_and(|s| s.matches(&m)) {
+            self.sym = LdlSymbolic::new(&m);
+        }
+        let Some(sym) = self.sym.as_ref() else {
+            return Err(QpError::NotFinite {
+                what: "Newton model (pattern)",
+                index: 0,
+                value: f64::NAN,
+            });
+        };
+        let floor = 1e-8 * maxdiag.max(f64::MIN_POSITIVE);
+        let mut sigma = self.sigma / 4.0;
+        if sigma < floor {
+            sigma = 0.0;
+        }
+        for _ in 0..80 {
+            for (k, &p) in diag.iter().enumerate() {
+                m.nzval[p] = base[k] + sigma;
+            }
+            self.factorizations += 1;
+            if SparseLdl::numeric(&m, sym).is_some() {
+                self.sigma = sigma;
+                self.max_sigma = self.max_sigma.max(sigma);
+                return Ok(sigma);
+            }
+            sigma = if sigma == 0.0 { floor } else { 4.0 * sigma };
+        }
+        Err(QpError::NotFinite {
+            what: "Newton model shift",
+            index: 0,
+            value: sigma,
+        })
     }
 }
 
@@ -166,9 +246,10 @@ pub fn build_qp(
     eps_qp: f64,
     trust: Option<TrustBox>,
     settings: &InnerSettings,
+    shift: &mut ModelShift,
 ) -> Result<(Qp, Vec<f64>), QpError> {
     let g = energy.gradient(y);
-    let h = energy.hessian(y, true);
+    let h = energy.hessian(y, settings.hessian_model);
     let nf = dofs.nfree;
     let naux = h.rank_one.len();
     let n = nf + naux;
@@ -188,8 +269,33 @@ pub fn build_qp(
     for c in 0..nf {
         ptrip.push((c, c, rho));
     }
+    let sigma = if energy.model_is_psd(settings.hessian_model) {
+        0.0
+    } else {
+        shift.choose(nf, &ptrip, maxdiag)?
+    };
+    if sigma > 0.0 {
+        for c in 0..nf {
+            ptrip.push((c, c, sigma));
+        }
+    }
     for (k, r) in h.rank_one.iter().enumerate() {
-        ptrip.push((nf + k, nf + k, r.coef));
+        let coef = if sigma > 0.0 {
+            let ww: f64 =
+                r.w.iter()
+                    .filter(|(dof, _)| dofs.col[*dof] != usize::MAX)
+                    .map(|(_, w)| w * w)
+                    .sum();
+            if ww > 0.0 {
+                // Kept positive so that P stays definite (Uzawa factorizes it).
+                (r.coef - sigma / ww).max(1e-6 * r.coef)
+            } else {
+                r.coef
+            }
+        } else {
+            r.coef
+        };
+        ptrip.push((nf + k, nf + k, coef));
     }
     let p = CscMatrix::from_triplets(n, n, &ptrip)?;
     let mut q = vec![0.0; n];
@@ -251,6 +357,16 @@ pub fn build_qp(
     Ok((Qp { p, q, a, l, u }, g))
 }
 
+/// The outcome of one inner step's line search.
+enum Step {
+    /// The QP step is zero up to round-off (non-negative slope).
+    Optimal,
+    /// The accepted point and its energy.
+    Accepted(Vec<f64>, f64),
+    /// No step length decreased J enough; the slope of the direction.
+    Failed(f64),
+}
+
 /// Lazy rows: given a trial point and the rows carried so far, returns the rows of T(ψ) that
 /// the trial point violates (value below the QP level `ε + δ`) and that are not carried yet.
 pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PairRows]) -> Vec<PairRows>;
@@ -258,10 +374,11 @@ pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PairRows]) -> Vec<PairRows>
 /// Minimizes J over the rows `rows` of T(ψ) (and the box `trust`, if given) starting from
 /// `start`, which must satisfy every row of T(ψ) (`≥ ε`) and the box.
 ///
-/// With an `oracle` (lazy rows), every QP solution `y + d` is checked against the whole of T(ψ)
-/// and the QP is solved again with the violated rows added until none is: each inner QP then has
-/// the solution of the all-pairs QP (it is strictly convex), so the inner path, and the outer
-/// iterates, are those of the all-pairs mode.
+/// With an `oracle` (lazy rows), the point the line search accepts along each QP step is checked
+/// against the whole of T(ψ), and the QP is solved again with the violated rows added until it
+/// violates none: every accepted point is in T(ψ). The inner path can differ from the all-pairs
+/// mode's (its QPs carry fewer rows), but both converge to the minimizer of J over T(ψ), so the
+/// outer iterates agree to the inner tolerance.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_subproblem(
     mesh: &Mesh,
@@ -278,6 +395,8 @@ pub fn solve_subproblem(
     deadline: Option<Instant>,
 ) -> Result<SubproblemResult, QpError> {
     let mut rows = rows;
+    // Which carried pairs the oracle added in this sub-problem (the only ones ever dropped).
+    let mut added_here = vec![false; rows.len()];
     let warm_pairs = warm_pairs.filter(|_| settings.warm_start);
     let eps_qp = eps + settings.margin_rel * eps + settings.margin_abs;
     let mut y = start.to_vec();
@@ -298,6 +417,7 @@ pub fn solve_subproblem(
         timed_out: false,
     };
     let mut warm: Option<WarmStart> = None;
+    let mut shift = ModelShift::default();
     'inner: for _ in 0..settings.max_inner {
         // Checked between inner steps (a QP in progress is not interrupted): the time limit
         // overshoots by at most one QP solve and line search.
@@ -306,9 +426,16 @@ pub fn solve_subproblem(
             break;
         }
         res.inner_iterations += 1;
-        let (sol, qp, g, d) = loop {
+        // Solve the QP over the carried rows, search the step on J, then ask the oracle about
+        // the point found: rows of T(ψ) it violates are added and the QP solved again from
+        // the same `y` (rows only grow, so this ends). The oracle sees the damped point, not
+        // the full step: a step the line search would cut short does not bring in the rows
+        // of everything it overshoots.
+        let (sol, qp, step) = loop {
             let t0 = Instant::now();
-            let (qp, g) = build_qp(mesh, energy, dofs, &rows, &y, eps_qp, trust, settings)?;
+            let (qp, g) = build_qp(
+                mesh, energy, dofs, &rows, &y, eps_qp, trust, settings, &mut shift,
+            )?;
             res.t_assembly_s += t0.elapsed().as_secs_f64();
             if warm.is_none() && res.inner_iterations == 1 && res.lazy_rounds == 0 {
                 // First QP of the outer step: the last step's multipliers, by pair.
@@ -348,14 +475,40 @@ pub fn solve_subproblem(
                     }
                 }
             }
-            if let Some(oracle) = oracle.as_mut() {
+            let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
+            let step = if slope >= 0.0 {
+                // d = 0 up to round-off: y is optimal for the model.
+                Step::Optimal
+            } else {
+                // y and y + d both satisfy the carried rows, so the segment does; the line
+                // search still checks them exactly.
+                let mut t = 1.0;
+                let mut accepted = None;
+                for _ in 0..=settings.max_halvings {
+                    let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
+                    let jt = energy.value(&trial);
+                    if jt.is_finite()
+                        && jt <= jy + 1e-4 * t * slope
+                        && min_slack(&rows, &trial, eps) >= 0.0
+                    {
+                        accepted = Some((trial, jt));
+                        break;
+                    }
+                    t *= 0.5;
+                }
+                match accepted {
+                    Some((trial, jt)) => Step::Accepted(trial, jt),
+                    None => Step::Failed(slope),
+                }
+            };
+            if let (Some(oracle), Step::Accepted(trial, _)) = (oracle.as_mut(), &step) {
                 let tp = Instant::now();
-                let full: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + b).collect();
-                let added = oracle(&full, &rows);
+                let added = oracle(trial, &rows);
                 res.t_pairs_s += tp.elapsed().as_secs_f64();
                 if !added.is_empty() {
                     // Keep this QP's duals for the carried rows; the new rows start at 0.
                     let old = row_offsets(&rows).1;
+                    added_here.resize(rows.len() + added.len(), true);
                     rows.extend(added);
                     res.lazy_rounds += 1;
                     warm = settings.warm_start.then(|| {
@@ -370,7 +523,7 @@ pub fn solve_subproblem(
                     continue;
                 }
             }
-            break (sol, qp, g, d);
+            break (sol, qp, step);
         };
         let (offsets, _) = row_offsets(&rows);
         res.multipliers = rows
@@ -384,39 +537,55 @@ pub fn solve_subproblem(
                 mu
             })
             .collect();
-        let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
-        if slope >= 0.0 {
-            // d = 0 up to round-off: y is optimal for the model.
-            break;
-        }
-        // y and y + d both lie in T(ψ) (the oracle checked y + d against all of it), so the
-        // segment does; the line search still checks the carried rows exactly.
-        let mut t = 1.0;
-        let mut accepted = None;
-        for _ in 0..=settings.max_halvings {
-            let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
-            let jt = energy.value(&trial);
-            if jt.is_finite() && jt <= jy + 1e-4 * t * slope && min_slack(&rows, &trial, eps) >= 0.0
-            {
-                accepted = Some((trial, jt));
-                break;
-            }
-            t *= 0.5;
-        }
-        match accepted {
-            Some((trial, jt)) => {
+        match step {
+            Step::Optimal => break,
+            Step::Accepted(trial, jt) => {
                 let dec = jy - jt;
+                let moved = trial
+                    .iter()
+                    .zip(&y)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
                 y = trial;
                 jy = jt;
+                let mut ysol = sol.y.clone();
+                if oracle.is_some() {
+                    // Lazy rows: forget the pairs the oracle added that are far from binding at
+                    // the new point (slack above 4× the last step's largest move plus ε);
+                    // the oracle brings any back that a later point violates.
+                    let thr = 4.0 * moved + eps;
+                    let (offsets, ncontact) = row_offsets(&rows);
+                    let keep: Vec<bool> = rows
+                        .iter()
+                        .zip(&added_here)
+                        .map(|(r, &added)| !added || r.min_value(&y) - eps <= thr)
+                        .collect();
+                    if keep.iter().any(|k| !k) {
+                        let mut kept_y = Vec::with_capacity(ysol.len());
+                        for ((r, &off), &k) in rows.iter().zip(&offsets).zip(&keep) {
+                            if k {
+                                kept_y.extend_from_slice(&ysol[off..off + r.len]);
+                            }
+                        }
+                        kept_y.extend_from_slice(&ysol[ncontact..]);
+                        ysol = kept_y;
+                        let mut it = keep.iter();
+                        rows.retain(|_| *it.next().unwrap());
+                        let mut it = keep.iter();
+                        res.multipliers.retain(|_| *it.next().unwrap());
+                        let mut it = keep.iter();
+                        added_here.retain(|_| *it.next().unwrap());
+                    }
+                }
                 warm = settings.warm_start.then(|| WarmStart {
                     x: vec![0.0; qp.n()],
-                    y: sol.y.clone(),
+                    y: ysol,
                 });
                 if dec <= settings.tol_inner * jy.abs().max(1.0) {
                     break;
                 }
             }
-            None => {
+            Step::Failed(slope) => {
                 // A predicted decrease at round-off level is convergence, not a failure.
                 res.line_search_failed = -slope > 1e-12 * jy.abs().max(1.0);
                 break;
