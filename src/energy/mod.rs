@@ -20,6 +20,10 @@
 //! * [`Membrane3dEnergy`] (St Venant–Kirchhoff triangles in 3D) and [`PressureEnergy`] (a
 //!   pressure load on a closed 2D curve) exist in one dimension only.
 //!
+//! [`mass::lumped_mass`] gives the lumped P1 vertex masses of a mesh from its bodies'
+//! densities: the masses of the inertia term of a time step and of the dynamic scenes'
+//! gravity.
+//!
 //! What a term stands for (elastic, potential, inertia) is its [`TermKind`]
 //! ([`Energy::kind`]); [`Energy::name`] is for display only.
 //!
@@ -60,6 +64,7 @@
 pub(crate) mod fd_test;
 pub mod gas;
 pub mod gravity;
+pub mod mass;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
