@@ -256,8 +256,8 @@ impl Hessian {
     }
 }
 
-/// What a term of the energy stands for: how a dynamic run books its value
-/// ([`crate::dynamics::StepRecord`]'s `elastic` and `potential`).
+/// What a term of the energy stands for: how a dynamic run books its value (the `elastic` and
+/// `potential` columns of its per-step record).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TermKind {
     /// Stored energy of the bodies: membranes, strings, neo-Hookean solids, the gas, and the
@@ -265,7 +265,7 @@ pub enum TermKind {
     Elastic,
     /// Potential energy of an external field: gravity.
     Potential,
-    /// The inertia term of a time step ([`crate::dynamics::Inertia`]), not part of a scene's J.
+    /// The inertia term of a time step (added by time stepping), not part of a scene's J.
     Inertia,
 }
 
@@ -285,9 +285,8 @@ pub trait Energy: Send + Sync {
     fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian);
 }
 
-/// What the solver minimises ([`crate::solve::outer::run`]): `J`'s value, gradient and
-/// (projected) Hessian. [`TotalEnergy`] is one; time stepping wraps it with its inertia term
-/// (`crate::solve::dynamics`).
+/// What the solver minimises (the outer loop of §3): `J`'s value, gradient and (projected)
+/// Hessian. [`TotalEnergy`] is one; time stepping wraps it with its inertia term.
 pub trait Objective {
     /// `J(x)`.
     fn value(&self, x: &[f64]) -> f64;

@@ -8,6 +8,7 @@
 
 use crate::contact::near_pairs;
 use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
+use crate::harness::scene_file::{self, load_scene_file};
 use crate::harness::{case, dynamic_run};
 use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
@@ -204,7 +205,7 @@ fn scene_from_file(
             );
         }
     }
-    let f = crate::scene::file::load(std::path::Path::new(&a.scene))?;
+    let f = load_scene_file(std::path::Path::new(&a.scene))?;
     let s = &f.solver;
     // `$id`: the flag's clap id; `$field`: the key of `[solver]` and of RunSettings.
     macro_rules! from_file {
@@ -220,7 +221,9 @@ fn scene_from_file(
         };
     }
     from_file!("backend", backend);
-    from_file!("pruning", pruning);
+    from_file!("pruning", pruning, |v| Ok::<_, anyhow::Error>(
+        scene_file::pruning(v)
+    ));
     from_file!("max_outer", max_outer);
     from_file!("max_inner", max_inner);
     from_file!("lazy_start", lazy_start);
