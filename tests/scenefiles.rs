@@ -110,6 +110,15 @@ const CORPUS: &[(&str, &[&str])] = &[
     ),
     ("unbounded.toml", &[":3:", "unbounded", "body \"falling\""]),
     ("unknown_backend.toml", &["solver.backend", "\"gurobi\""]),
+    (
+        "solver_bad_newton_model.toml",
+        &[
+            ":5:",
+            "solver.newton_model",
+            "\"exact\"",
+            "shifted, projected",
+        ],
+    ),
     ("unknown_body_key.toml", &[":19:", "unknown field `colour`"]),
     ("unknown_contact_body.toml", &["contact.pairs", "\"uper\""]),
     ("unknown_key.toml", &[":3:", "unknown field `epsilon`"]),
@@ -441,7 +450,8 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     .unwrap();
     let solver = "[solver]\nbackend = \"uzawa\"\npruning = \"lazy\"\naccuracy = \"low\"\n\
                   max_outer = 4\nmax_inner = 3\ntol_j = 1e-7\nqp_tol = 1e-7\n\
-                  lazy_start = 0.5\ntrust_delta0 = 0.5\nwarm_start = false\n";
+                  lazy_start = 0.5\ntrust_delta0 = 0.5\nwarm_start = false\n\
+                  newton_model = \"projected\"\n";
     let a = src.find("[solver]").unwrap();
     let b = a + src[a..].find("\n\n").unwrap();
     std::fs::write(
@@ -479,6 +489,7 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(set["trust"]["delta0"], 0.5);
     assert_eq!(set["inner"]["max_inner"], 3);
     assert_eq!(set["inner"]["warm_start"], false);
+    assert_eq!(set["inner"]["hessian_model"], "projected");
     // flags given on the command line win, the rest still come from the file
     let s = summary(&[
         "--backend",
@@ -497,4 +508,7 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(s["pruning"], "lazy");
     assert_eq!(s["settings"]["inner"]["max_inner"], 3);
     assert_eq!(s["qp_tol"], 1e-7);
+    assert_eq!(s["settings"]["inner"]["hessian_model"], "projected");
+    let s = summary(&["--newton-model", "shifted"]);
+    assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted");
 }

@@ -13,7 +13,7 @@
 //! By Lemma 4.2 (in 3D with the `edge_edge` rows, Remark 4.3) every φ satisfying the rows is
 //! admissible. Each row also carries the barycentric weight of its vertex pair in the closest
 //! points (`α_i`, `β_i`, `(1 − s, s)_i·(1 − t, t)_j`); the weights sum to 1 and give the
-//! contact force of Lemma 5.6 in [`crate::harness::diagnostics`].
+//! contact force of Lemma 5.6 (computed by the harness's diagnostics).
 //!
 //! One module per pair kind, named as the kernels of [`distance`]: [`point_edge`],
 //! [`point_triangle`], [`edge_edge`], each with its enumeration (the all-pairs mode) and its

@@ -20,6 +20,10 @@
 //! * [`Membrane3dEnergy`] (St Venant–Kirchhoff triangles in 3D) and [`PressureEnergy`] (a
 //!   pressure load on a closed 2D curve) exist in one dimension only.
 //!
+//! [`mass::lumped_mass`] gives the lumped P1 vertex masses of a mesh from its bodies'
+//! densities: the masses of the inertia term of a time step and of the dynamic scenes'
+//! gravity.
+//!
 //! What a term stands for (elastic, potential, inertia) is its [`TermKind`]
 //! ([`Energy::kind`]); [`Energy::name`] is for display only.
 //!
@@ -60,6 +64,7 @@
 pub(crate) mod fd_test;
 pub mod gas;
 pub mod gravity;
+pub mod mass;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
@@ -251,8 +256,8 @@ impl Hessian {
     }
 }
 
-/// What a term of the energy stands for: how a dynamic run books its value
-/// ([`crate::dynamics::StepRecord`]'s `elastic` and `potential`).
+/// What a term of the energy stands for: how a dynamic run books its value (the `elastic` and
+/// `potential` columns of its per-step record).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TermKind {
     /// Stored energy of the bodies: membranes, strings, neo-Hookean solids, the gas, and the
@@ -260,7 +265,7 @@ pub enum TermKind {
     Elastic,
     /// Potential energy of an external field: gravity.
     Potential,
-    /// The inertia term of a time step ([`crate::dynamics::Inertia`]), not part of a scene's J.
+    /// The inertia term of a time step (added by time stepping), not part of a scene's J.
     Inertia,
 }
 
@@ -336,9 +341,8 @@ impl HessianModel {
     }
 }
 
-/// What the solver minimises ([`crate::solve::outer::run`]): `J`'s value, gradient and
-/// (projected) Hessian. [`TotalEnergy`] is one; time stepping wraps it with its inertia term
-/// (`crate::solve::dynamics`).
+/// What the solver minimises (the outer loop of §3): `J`'s value, gradient and (projected)
+/// Hessian. [`TotalEnergy`] is one; time stepping wraps it with its inertia term.
 pub trait Objective {
     /// `J(x)`.
     fn value(&self, x: &[f64]) -> f64;

@@ -2,6 +2,7 @@
 //! accuracy preset and a pruning mode, then diagnosed. Shared by `contactlab sweep` (one CSV
 //! row per case) and the tests; `contactlab run` builds its scene the same way.
 
+use crate::energy::mass::lumped_mass;
 use crate::energy::{HessianModel, TermKind};
 use crate::harness::diagnostics::{
     converged_diagnostics, ConvergedDiagnostics, DiagnosticSettings,
@@ -9,7 +10,7 @@ use crate::harness::diagnostics::{
 use crate::scene::dynamic::DynamicScene;
 use crate::scene::Scene;
 use crate::solve::dynamics::{
-    lumped_mass, rest_force, simulate_observed, DynamicLoop, DynamicResult, DynamicSettings, System,
+    rest_force, simulate_observed, DynamicLoop, DynamicResult, DynamicSettings, System,
 };
 use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};

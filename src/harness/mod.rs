@@ -1,4 +1,6 @@
-//! The harness: one run of a scene and its run directory ([`run`], [`dynamic_run`]), a case
+//! The harness: one run of a scene and its run directory ([`run`], [`dynamic_run`]), scene
+//! files loaded with the solver's rules for their `[solver]` and `[dynamics]`
+//! ([`scene_file`]), a case
 //! (scene × backend × preset × pruning, diagnosed: [`case`]), sweeps of cases ([`sweep`]),
 //! the rows they write, one struct per kind of row ([`rows`]: where a column is added),
 //! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]) and QP
@@ -15,4 +17,5 @@ pub mod export;
 pub mod rows;
 pub mod run;
 pub mod scaling;
+pub mod scene_file;
 pub mod sweep;

@@ -9,6 +9,7 @@
 use crate::contact::near_pairs;
 use crate::energy::HessianModel;
 use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
+use crate::harness::scene_file::{self, load_scene_file};
 use crate::harness::{case, dynamic_run};
 use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
@@ -219,7 +220,7 @@ fn scene_from_file(
             );
         }
     }
-    let f = crate::scene::file::load(std::path::Path::new(&a.scene))?;
+    let f = load_scene_file(std::path::Path::new(&a.scene))?;
     let s = &f.solver;
     // `$id`: the flag's clap id; `$field`: the key of `[solver]` and of RunSettings.
     macro_rules! from_file {
@@ -235,7 +236,9 @@ fn scene_from_file(
         };
     }
     from_file!("backend", backend);
-    from_file!("pruning", pruning);
+    from_file!("pruning", pruning, |v| Ok::<_, anyhow::Error>(
+        scene_file::pruning(v)
+    ));
     from_file!("max_outer", max_outer);
     from_file!("max_inner", max_inner);
     from_file!("lazy_start", lazy_start);
@@ -245,6 +248,11 @@ fn scene_from_file(
     from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
         .map_err(anyhow::Error::msg));
     from_file!("no_warm_start", warm_start);
+    if !explicit("newton_model") {
+        if let Some(m) = &s.newton_model {
+            settings.hessian_model = parse_newton_model(m).map_err(anyhow::Error::msg)?;
+        }
+    }
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,

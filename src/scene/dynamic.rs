@@ -312,7 +312,7 @@ pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
     let mesh = assemble_mesh(2, x_ref, fixed, &[ring, floor], &file_order(2));
     mesh.validate()?;
     let density = vec![p.density, 0.0];
-    let mass = crate::solve::dynamics::lumped_mass(&mesh, &mesh.x_ref, &density)
+    let mass = crate::energy::mass::lumped_mass(&mesh, &mesh.x_ref, &density)
         .expect("one density per body, all finite");
     let energy = TotalEnergy {
         terms: vec![
@@ -832,7 +832,7 @@ impl BuiltinScene for Drop3d {
 mod tests {
     use super::*;
     use crate::contact::min_distance;
-    use crate::solve::dynamics::lumped_mass;
+    use crate::energy::mass::lumped_mass;
 
     #[test]
     fn dynamic_scenes_build_admissible_with_the_expected_masses() {

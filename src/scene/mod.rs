@@ -42,6 +42,7 @@ pub mod ring;
 pub mod rod;
 pub mod sheets;
 pub mod solids;
+mod stacked;
 
 use crate::energy::TotalEnergy;
 use crate::scene::mesh::Mesh;

@@ -69,8 +69,8 @@ pub trait BuiltinScene: Sync {
 
     /// The scene for a dynamic run at level `n` (`None`: the default level) and its full
     /// parameter set as JSON. Default: the static scene wrapped with density 1 per body and
-    /// zero velocity (Δt and steps 0, which [`crate::solve::dynamics::DynamicSettings`]
-    /// refuses, so a run must give them), its JSON the scene's parameters or
+    /// zero velocity (Δt and steps 0, which a dynamic run refuses, so the run must give
+    /// them), its JSON the scene's parameters or
     /// `{n, eps, params}`.
     fn dynamic(
         &self,

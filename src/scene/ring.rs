@@ -278,9 +278,9 @@ pub fn self_contact_pairs(mesh: &Mesh, x: &[f64], eps: f64) -> Vec<NearPair> {
 }
 
 /// The state reached, from the contact pattern: `self_contact` when some
-/// [`self_contact_pairs`] pair exists, else `no_contact`. (The body-level
-/// [`crate::harness::diagnostics::contact_pattern`] would also count along-curve neighbours at a sharp
-/// fold as self-contact; this does not.)
+/// [`self_contact_pairs`] pair exists, else `no_contact`. (The body-level contact pattern of
+/// the harness's diagnostics (`contact_pattern`) would also count along-curve neighbours at a
+/// sharp fold as self-contact; this does not.)
 pub fn classify_state(mesh: &Mesh, x: &[f64], eps: f64) -> String {
     if self_contact_pairs(mesh, x, eps).is_empty() {
         "no_contact".into()

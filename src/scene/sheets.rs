@@ -48,10 +48,9 @@
 //! defaults converge in 60 steps). With `lower_fixed = true` (a flat obstacle) it converges in
 //! 2 steps even at `weight = 0.3`.
 
+use super::stacked::{self, Block, StackError};
 use super::Scene;
-use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{Gravity, Membrane3dEnergy, TotalEnergy};
-use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use thiserror::Error;
@@ -133,6 +132,23 @@ pub enum SheetsError {
     Mesh(#[from] MeshError),
 }
 
+impl From<StackError> for SheetsError {
+    fn from(e: StackError) -> Self {
+        match e {
+            StackError::Mesh(e) => SheetsError::Mesh(e),
+            StackError::InadmissibleStart {
+                pair,
+                distance,
+                eps,
+            } => SheetsError::InadmissibleStart {
+                pair,
+                distance,
+                eps,
+            },
+        }
+    }
+}
+
 /// Grid squares per side of each sheet at level `n`.
 pub fn cells(n: usize) -> usize {
     4 * n
@@ -184,8 +200,7 @@ impl SheetsParams {
         if !self.angle_deg.is_finite() {
             return bad("angle_deg", self.angle_deg.to_string(), "must be finite");
         }
-        let (s, c) = self.angle_deg.to_radians().sin_cos();
-        if self.half_size * (s.abs() + c.abs()) >= 1.0 {
+        if stacked::rotated_extent(self.half_size, self.angle_deg) >= 1.0 {
             return bad(
                 "half_size",
                 self.half_size.to_string(),
@@ -255,7 +270,7 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     let eps = p.eps.unwrap_or((h / 10.0).min(0.5 * p.gap));
     let (pts, grid_tris, boundary) = unit_grid(m);
     let np = pts.len();
-    let (s, c) = p.angle_deg.to_radians().sin_cos();
+    let sc = stacked::sin_cos(p.angle_deg);
     let mut x_ref = Vec::with_capacity(6 * np);
     let mut x0 = Vec::with_capacity(6 * np);
     let mut fixed = Vec::with_capacity(2 * np);
@@ -266,7 +281,7 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     }
     for (k, q) in pts.iter().enumerate() {
         let (u, v) = (p.half_size * q[0], p.half_size * q[1]);
-        let (rx, ry) = (c * u - s * v, s * u + c * v);
+        let (rx, ry) = stacked::rotate_z(sc, u, v);
         x_ref.extend_from_slice(&[rx / p.stretch_upper, ry / p.stretch_upper, p.gap]);
         x0.extend_from_slice(&[rx, ry, p.gap]);
         fixed.push(boundary[k]);
@@ -274,40 +289,28 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
     let lower_tris = grid_tris.clone();
     let upper_tris: Vec<[usize; 3]> = grid_tris.iter().map(|t| t.map(|v| v + np)).collect();
     let sq2 = std::f64::consts::SQRT_2;
-    let part = |name: &str, b: usize, tris: &[[usize; 3]], bh: f64| BodyPart {
-        name: name.into(),
-        kind: BodyKind::Surface,
-        vertices: (b * np..(b + 1) * np).collect(),
+    let block = |tris: &[[usize; 3]], h: f64| Block {
         elements: tris.iter().map(|t| [t[0], t[1], t[2], 0]).collect(),
-        arity: 3,
-        h: Some(bh),
-        edges: None,
+        h,
         faces: None,
     };
-    let parts = [
-        part(
-            "lower",
-            0,
-            &lower_tris,
-            2.0 * sq2 / (m as f64 * p.stretch_lower),
-        ),
-        part(
-            "upper",
-            1,
+    let blocks = [
+        block(&lower_tris, 2.0 * sq2 / (m as f64 * p.stretch_lower)),
+        block(
             &upper_tris,
             2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
         ),
     ];
-    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
-    mesh.validate()?;
-    let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
-    if distance < eps {
-        return Err(SheetsError::InadmissibleStart {
-            pair: format!("{pair:?}"),
-            distance,
-            eps,
-        });
-    }
+    let mesh = stacked::assemble(
+        BodyKind::Surface,
+        3,
+        np,
+        blocks,
+        x_ref.clone(),
+        fixed,
+        &x0,
+        eps,
+    )?;
     let mut energy = TotalEnergy::default();
     if !p.lower_fixed {
         energy.terms.push(Box::new(Membrane3dEnergy::new(
@@ -387,6 +390,7 @@ impl LevelScene for Sheets {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::broad_phase::min_distance_3d;
 
     #[test]
     fn sheets_default_mesh_counts_and_admissibility() {

@@ -36,10 +36,9 @@
 
 #[cfg(test)]
 use super::sheets::unique_edges;
+use super::stacked::{self, Block, StackError};
 use super::Scene;
-use crate::contact::broad_phase::min_distance_3d;
 use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
-use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use nalgebra::Vector3;
@@ -121,6 +120,23 @@ pub enum SolidsError {
     Tet(#[from] DegenerateTet),
 }
 
+impl From<StackError> for SolidsError {
+    fn from(e: StackError) -> Self {
+        match e {
+            StackError::Mesh(e) => SolidsError::Mesh(e),
+            StackError::InadmissibleStart {
+                pair,
+                distance,
+                eps,
+            } => SolidsError::InadmissibleStart {
+                pair,
+                distance,
+                eps,
+            },
+        }
+    }
+}
+
 /// `h`: the largest reference edge, the lower block's cell diagonal `√3/n`.
 pub fn mesh_size(p: &SolidsParams) -> f64 {
     // (the upper block is smaller: validate requires upper_size < 1)
@@ -162,8 +178,7 @@ impl SolidsParams {
         if !self.angle_deg.is_finite() {
             return bad("angle_deg", self.angle_deg.to_string(), "must be finite");
         }
-        let (s, c) = self.angle_deg.to_radians().sin_cos();
-        if self.upper_size * (s.abs() + c.abs()) >= 1.0 {
+        if stacked::rotated_extent(self.upper_size, self.angle_deg) >= 1.0 {
             return bad(
                 "upper_size",
                 self.upper_size.to_string(),
@@ -261,7 +276,7 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
     let s = p.upper_size;
     let z_top = s - p.overlap;
     let comp = (s - p.overlap - p.gap) / s;
-    let (sn, cs) = p.angle_deg.to_radians().sin_cos();
+    let sc = stacked::sin_cos(p.angle_deg);
     let mut x_ref = Vec::with_capacity(6 * np);
     let mut x0 = Vec::with_capacity(6 * np);
     let mut fixed = Vec::with_capacity(2 * np);
@@ -273,7 +288,7 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
     }
     for q in &pts {
         let (u, v) = (s * (q[0] - 0.5), s * (q[1] - 0.5));
-        let (x, y) = (cs * u - sn * v, sn * u + cs * v);
+        let (x, y) = stacked::rotate_z(sc, u, v);
         let z = z_top - s * (1.0 - q[2]);
         x_ref.extend_from_slice(&[x, y, z]);
         x0.extend_from_slice(&[x, y, z_top - comp * (z_top - z)]);
@@ -287,30 +302,25 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
     let lower_faces = cube_faces.clone();
     let upper_faces: Vec<[usize; 3]> = cube_faces.iter().map(|f| f.map(|v| v + np)).collect();
     let nt = cube_tets.len();
-    let part = |name: &str, b: usize, faces: Vec<[usize; 3]>, bh: f64| BodyPart {
-        name: name.into(),
-        kind: BodyKind::Solid,
-        vertices: (b * np..(b + 1) * np).collect(),
+    let block = |b: usize, faces: Vec<[usize; 3]>, h: f64| Block {
         elements: tets[b * nt..(b + 1) * nt].to_vec(),
-        arity: 4,
-        h: Some(bh),
-        edges: None,
+        h,
         faces: Some(faces),
     };
-    let parts = [
-        part("lower", 0, lower_faces, 3f64.sqrt() / m as f64),
-        part("upper", 1, upper_faces, 3f64.sqrt() * s / m as f64),
+    let blocks = [
+        block(0, lower_faces, 3f64.sqrt() / m as f64),
+        block(1, upper_faces, 3f64.sqrt() * s / m as f64),
     ];
-    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &parts, &file_order(2));
-    mesh.validate()?;
-    let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
-    if distance < eps {
-        return Err(SolidsError::InadmissibleStart {
-            pair: format!("{pair:?}"),
-            distance,
-            eps,
-        });
-    }
+    let mesh = stacked::assemble(
+        BodyKind::Solid,
+        4,
+        np,
+        blocks,
+        x_ref.clone(),
+        fixed,
+        &x0,
+        eps,
+    )?;
     // One term over both blocks when they are alike (the sums of the committed results), one
     // per block otherwise.
     let energy = if p.contrast == 1.0 {
@@ -390,6 +400,7 @@ impl LevelScene for Solids {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::broad_phase::min_distance_3d;
     use crate::contact::p3;
 
     /// `Σ_faces centroid · normal · area / 3`: the volume enclosed by outward faces.

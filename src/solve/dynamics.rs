@@ -5,7 +5,7 @@
 //!
 //! §6 writes one step as `min_{φ_{i+1} ∈ A_{h,ε}} ½∫ m |v_{i+1} − v_i|² + J(φ_{i+1})` with
 //! `v_{i+1} = (φ_{i+1} − φ_i)/Δt`. With lumped P1 masses `m_v` (per vertex, see
-//! [`lumped_mass`]) and `x̃ = x_i + Δt v_i`,
+//! [`lumped_mass`], from the energy stage) and `x̃ = x_i + Δt v_i`,
 //!
 //! ```text
 //! ½ m_v |v_{i+1} − v_i|² = ½ m_v |(x − x_i)/Δt − v_i|² = ½ m_v |x − x̃|² / Δt²,
@@ -52,7 +52,10 @@
 
 use crate::contact::{ContactPair, PairRows};
 use crate::energy::{Energy, Hessian, HessianModel, Objective, TermKind, TotalEnergy};
-use crate::scene::mesh::{BodyKind, Mesh};
+// Lumped masses belong to the energy stage (inertia is a kind of energy); re-exported for the
+// callers of time stepping.
+pub use crate::energy::mass::lumped_mass;
+use crate::scene::mesh::Mesh;
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
 use contactlab_solvers::QpBackend;
@@ -140,12 +143,12 @@ pub enum DynamicsError {
         /// The expected length.
         expected: usize,
     },
-    /// A density or mass that is negative or not finite.
+    /// A mass that is negative or not finite.
     #[error("{what} {index} is {value}: must be finite and >= 0")]
     BadMass {
-        /// `density of body` or `mass of vertex`.
+        /// `mass of vertex` (a bad density is [`crate::energy::mass::MassError`]).
         what: &'static str,
-        /// Body or vertex index.
+        /// Vertex index.
         index: usize,
         /// The value.
         value: f64,
@@ -166,72 +169,6 @@ pub enum DynamicsError {
         /// The outer loop's error.
         source: RunError,
     },
-}
-
-/// Lumped P1 masses per vertex: each body's elements of highest dimension carry its density
-/// — tetrahedra per volume (3D solids), else triangles per area (2D solids, 3D surfaces),
-/// else edges per length (curves) — and each element gives an equal share of its reference
-/// mass to each of its vertices (a quarter, a third, a half). A vertex shared by two bodies
-/// gets mass from both. `density[b]` is body `b`'s density.
-pub fn lumped_mass(mesh: &Mesh, x_ref: &[f64], density: &[f64]) -> Result<Vec<f64>, DynamicsError> {
-    if density.len() != mesh.bodies.len() {
-        return Err(DynamicsError::Length {
-            what: "density (one per body)",
-            got: density.len(),
-            expected: mesh.bodies.len(),
-        });
-    }
-    if x_ref.len() != mesh.x_ref.len() {
-        return Err(DynamicsError::Length {
-            what: "x_ref",
-            got: x_ref.len(),
-            expected: mesh.x_ref.len(),
-        });
-    }
-    for (index, &value) in density.iter().enumerate() {
-        if !(value >= 0.0 && value.is_finite()) {
-            return Err(DynamicsError::BadMass {
-                what: "density of body",
-                index,
-                value,
-            });
-        }
-    }
-    let p = |v: usize| mesh.point(x_ref, v);
-    let mut mass = vec![0.0; mesh.nv()];
-    for (body, &rho) in mesh.bodies.iter().zip(density) {
-        if !body.tets.is_empty() {
-            for &t in &body.tets {
-                let t = mesh.tets[t];
-                let a = p(t[0]);
-                let vol = (p(t[1]) - a)
-                    .cross(&(p(t[2]) - a))
-                    .dot(&(p(t[3]) - a))
-                    .abs()
-                    / 6.0;
-                for v in t {
-                    mass[v] += rho * vol / 4.0;
-                }
-            }
-        } else if !body.triangles.is_empty() {
-            for &t in &body.triangles {
-                let t = mesh.triangles[t];
-                let area = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
-                for v in t {
-                    mass[v] += rho * area / 3.0;
-                }
-            }
-        } else {
-            debug_assert!(body.kind == BodyKind::Curve || body.edges.is_empty());
-            for &e in &body.edges {
-                let [a, b] = mesh.edges[e];
-                let l = (p(b) - p(a)).norm();
-                mass[a] += 0.5 * rho * l;
-                mass[b] += 0.5 * rho * l;
-            }
-        }
-    }
-    Ok(mass)
 }
 
 /// The inertia term of (★): `(c/2) Σ_v m_v |x_v − x̃_v|²`. Gradient `c m_v (x_v − x̃_v)`,
@@ -813,7 +750,6 @@ pub fn rest_force(records: &[StepRecord], fraction: f64) -> Option<RestForce> {
 mod tests {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
-    use crate::scene::mesh::Body;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -856,83 +792,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    #[test]
-    fn lumped_mass_totals_are_density_times_measure() {
-        // 2D: a solid (two triangles of the unit square) and a curve (two edges, lengths 1, 2)
-        let mesh = Mesh {
-            dim: 2,
-            x_ref: vec![
-                0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 3.0, 0.0, 3.0, 1.0, 3.0, 3.0,
-            ],
-            fixed: vec![false; 7],
-            edges: vec![[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6]],
-            edge_body: vec![0, 0, 0, 0, 1, 1],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-            bodies: vec![
-                Body {
-                    name: "square".into(),
-                    kind: BodyKind::Solid,
-                    vertices: vec![0, 1, 2, 3],
-                    edges: vec![0, 1, 2, 3],
-                    triangles: vec![0, 1],
-                    ..Default::default()
-                },
-                Body {
-                    name: "curve".into(),
-                    kind: BodyKind::Curve,
-                    vertices: vec![4, 5, 6],
-                    edges: vec![4, 5],
-                    ..Default::default()
-                },
-            ],
-            ..Default::default()
-        };
-        let m = lumped_mass(&mesh, &mesh.x_ref, &[2.0, 0.5]).unwrap();
-        let square: f64 = m[..4].iter().sum();
-        let curve: f64 = m[4..].iter().sum();
-        assert!((square - 2.0 * 1.0).abs() < 1e-15, "{square}");
-        assert!((curve - 0.5 * 3.0).abs() < 1e-15, "{curve}");
-        assert_eq!(m[4], 0.25);
-        assert_eq!(m[6], 0.5);
-        // bad input named
-        let e = lumped_mass(&mesh, &mesh.x_ref, &[1.0])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("density") && e.contains("1 entries"), "{e}");
-        let e = lumped_mass(&mesh, &mesh.x_ref, &[1.0, -1.0])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("body 1 is -1"), "{e}");
-        // 3D: a tet of volume 1/6 (density 6) and a surface triangle of area 1/2 (density 4)
-        let x = vec![
-            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 5.0, 0.0, 0.0, 6.0, 0.0,
-            0.0, 5.0, 1.0, 0.0,
-        ];
-        let mesh3 = Mesh {
-            dim: 3,
-            x_ref: x.clone(),
-            fixed: vec![false; 7],
-            tets: vec![[0, 1, 2, 3]],
-            triangles: vec![[4, 5, 6]],
-            bodies: vec![
-                Body {
-                    kind: BodyKind::Solid,
-                    tets: vec![0],
-                    ..Default::default()
-                },
-                Body {
-                    kind: BodyKind::Surface,
-                    triangles: vec![0],
-                    ..Default::default()
-                },
-            ],
-            ..Default::default()
-        };
-        let m = lumped_mass(&mesh3, &x, &[6.0, 4.0]).unwrap();
-        assert!((m[..4].iter().sum::<f64>() - 1.0).abs() < 1e-15);
-        assert!((m[4..].iter().sum::<f64>() - 2.0).abs() < 1e-15);
     }
 
     #[test]

@@ -374,11 +374,11 @@ pub type RowOracle<'a> = &'a mut dyn FnMut(&[f64], &[PairRows]) -> Vec<PairRows>
 /// Minimizes J over the rows `rows` of T(ψ) (and the box `trust`, if given) starting from
 /// `start`, which must satisfy every row of T(ψ) (`≥ ε`) and the box.
 ///
-/// With an `oracle` (lazy rows), the point the line search accepts along each QP step is checked
-/// against the whole of T(ψ), and the QP is solved again with the violated rows added until it
-/// violates none: every accepted point is in T(ψ). The inner path can differ from the all-pairs
-/// mode's (its QPs carry fewer rows), but both converge to the minimizer of J over T(ψ), so the
-/// outer iterates agree to the inner tolerance.
+/// With an `oracle` (lazy rows), every QP solution `y + d` is checked against the whole of T(ψ)
+/// and the QP is solved again with violated rows added until none is: each inner QP then has
+/// the solution of the all-pairs QP (it is strictly convex), so the inner path, and the outer
+/// iterates, are those of the all-pairs mode. Pairs the oracle added that are far from binding
+/// after an accepted step are dropped again (the next QP's check brings back any it needs).
 #[allow(clippy::too_many_arguments)]
 pub fn solve_subproblem(
     mesh: &Mesh,
@@ -426,11 +426,10 @@ pub fn solve_subproblem(
             break;
         }
         res.inner_iterations += 1;
-        // Solve the QP over the carried rows, search the step on J, then ask the oracle about
-        // the point found: rows of T(ψ) it violates are added and the QP solved again from
-        // the same `y` (rows only grow, so this ends). The oracle sees the damped point, not
-        // the full step: a step the line search would cut short does not bring in the rows
-        // of everything it overshoots.
+        // Solve the QP over the carried rows and ask the oracle about the full step `y + d`:
+        // rows of T(ψ) it violates are added and the QP solved again from the same `y` (rows
+        // only grow within this loop, so it ends). A QP solution that violates no row of T(ψ)
+        // is the all-pairs QP's solution (a convex QP). Then the line search on J.
         let (sol, qp, step) = loop {
             let t0 = Instant::now();
             let (qp, g) = build_qp(
@@ -475,35 +474,10 @@ pub fn solve_subproblem(
                     }
                 }
             }
-            let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
-            let step = if slope >= 0.0 {
-                // d = 0 up to round-off: y is optimal for the model.
-                Step::Optimal
-            } else {
-                // y and y + d both satisfy the carried rows, so the segment does; the line
-                // search still checks them exactly.
-                let mut t = 1.0;
-                let mut accepted = None;
-                for _ in 0..=settings.max_halvings {
-                    let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
-                    let jt = energy.value(&trial);
-                    if jt.is_finite()
-                        && jt <= jy + 1e-4 * t * slope
-                        && min_slack(&rows, &trial, eps) >= 0.0
-                    {
-                        accepted = Some((trial, jt));
-                        break;
-                    }
-                    t *= 0.5;
-                }
-                match accepted {
-                    Some((trial, jt)) => Step::Accepted(trial, jt),
-                    None => Step::Failed(slope),
-                }
-            };
-            if let (Some(oracle), Step::Accepted(trial, _)) = (oracle.as_mut(), &step) {
+            if let Some(oracle) = oracle.as_mut() {
                 let tp = Instant::now();
-                let added = oracle(trial, &rows);
+                let full: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + b).collect();
+                let added = oracle(&full, &rows);
                 res.t_pairs_s += tp.elapsed().as_secs_f64();
                 if !added.is_empty() {
                     // Keep this QP's duals for the carried rows; the new rows start at 0.
@@ -523,6 +497,32 @@ pub fn solve_subproblem(
                     continue;
                 }
             }
+            let slope: f64 = g.iter().zip(&d).map(|(a, b)| a * b).sum();
+            let step = if slope >= 0.0 {
+                // d = 0 up to round-off: y is optimal for the model.
+                Step::Optimal
+            } else {
+                // y and y + d both lie in T(ψ) (the oracle checked y + d against all of it),
+                // so the segment does; the line search still checks the carried rows exactly.
+                let mut t = 1.0;
+                let mut accepted = None;
+                for _ in 0..=settings.max_halvings {
+                    let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
+                    let jt = energy.value(&trial);
+                    if jt.is_finite()
+                        && jt <= jy + 1e-4 * t * slope
+                        && min_slack(&rows, &trial, eps) >= 0.0
+                    {
+                        accepted = Some((trial, jt));
+                        break;
+                    }
+                    t *= 0.5;
+                }
+                match accepted {
+                    Some((trial, jt)) => Step::Accepted(trial, jt),
+                    None => Step::Failed(slope),
+                }
+            };
             break (sol, qp, step);
         };
         let (offsets, _) = row_offsets(&rows);
@@ -599,4 +599,60 @@ pub fn solve_subproblem(
     res.y = y;
     res.energy = jy;
     Ok(res)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Upper triplets of the 1D Laplacian-like tridiagonal `a` on the diagonal, `b` off it.
+    fn tridiagonal(n: usize, a: f64, b: f64) -> Vec<(usize, usize, f64)> {
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push((i, i, a));
+            if i + 1 < n {
+                t.push((i, i + 1, b));
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn model_shift_is_zero_on_a_positive_definite_model() {
+        // eigenvalues 2 − 2cos(kπ/(n+1)) > 0
+        let t = tridiagonal(10, 2.0, -1.0);
+        let mut shift = ModelShift::default();
+        assert_eq!(shift.choose(10, &t, 2.0).unwrap(), 0.0);
+        assert_eq!(shift.factorizations, 1);
+    }
+
+    #[test]
+    fn model_shift_makes_an_indefinite_model_definite_within_a_factor_4() {
+        // eigenvalues a + 2b·cos(kπ/(n+1)); with a = 1, b = −1 the smallest is
+        // 1 − 2cos(π/11) ≈ −0.919
+        let n = 10;
+        let t = tridiagonal(n, 1.0, -1.0);
+        let lambda_min = 1.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
+        let mut shift = ModelShift::default();
+        let sigma = shift.choose(n, &t, 1.0).unwrap();
+        assert!(
+            sigma > -lambda_min,
+            "σ = {sigma} does not cover λ_min = {lambda_min}"
+        );
+        assert!(
+            sigma <= 4.0 * -lambda_min,
+            "σ = {sigma} more than 4·|λ_min|"
+        );
+        // the next step starts from σ/4, which fails, and climbs back to the same σ
+        let again = shift.choose(n, &t, 1.0).unwrap();
+        assert_eq!(again, sigma);
+        // a model that became definite brings the shift back to 0 within a few steps
+        let pd = tridiagonal(n, 3.0, -1.0);
+        let mut steps = 0;
+        while shift.choose(n, &pd, 3.0).unwrap() > 0.0 {
+            steps += 1;
+            assert!(steps < 40, "the shift does not fall back to 0");
+        }
+        assert_eq!(shift.max_sigma, sigma);
+    }
 }

@@ -63,6 +63,13 @@
 //! [`WELD_TOL`] × the longer longest edge, and chains merging two vertices of one body are
 //! errors.
 //!
+//! **What the solver checks.** `[solver]` and `[dynamics]` name the solver's settings
+//! (backends, accuracy presets, the run settings' ranges, time-stepping schemes). The scene
+//! stage does not import the solver: [`load_with`] takes those rules as a [`RunRules`],
+//! implemented by the harness (`harness::scene_file::load_scene_file`, what every run of a
+//! scene file loads it with), and applies them where the file's other checks run, so their
+//! errors keep their place among the others. [`load`] and [`parse`] check everything else.
+//!
 //! The module is split by concern: `schema` holds the TOML structs (serde), `validate` the
 //! scene-level keys, `body` the loading and checking of each body's mesh, `welds` the shared
 //! vertices, `contact` the `[contact]` filter, `assemble` the mesh, energy terms and the
@@ -80,7 +87,7 @@ use crate::scene::mesh::BodyKind;
 use crate::scene::meshio::MeshReadError;
 use crate::scene::Scene;
 use schema::FileSpec;
-pub use schema::{DynamicsSpec, SolverSpec};
+pub use schema::{DynamicsSpec, PruningName, SolverSpec};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -186,8 +193,8 @@ pub struct SceneFile {
 impl SceneFile {
     /// The scene for `contactlab run FILE --dynamic`: lumped masses from each body's
     /// `density`, the initial velocity of the bodies' `velocity` keys, Δt and steps from
-    /// `[dynamics]` (0 when absent: [`crate::solve::dynamics::DynamicSettings::validate`] refuses
-    /// them unless the command line gives them). A body with a free vertex needs a
+    /// `[dynamics]` (0 when absent: a dynamic run refuses them unless the command line gives
+    /// them). A body with a free vertex needs a
     /// `density > 0` (a massless free vertex has no dynamics); a body whose vertices are all
     /// fixed may omit it (taken as 0).
     pub fn into_dynamic(self) -> Result<crate::scene::dynamic::DynamicScene, SceneFileError> {
@@ -229,22 +236,75 @@ impl SceneFile {
 /// initial configuration).
 pub const WELD_TOL: f64 = 1e-9;
 
-/// Reads and builds a scene file.
+/// A value of `[solver]` or `[dynamics]` that a [`RunRules`] refuses; the loader reports it
+/// as [`SceneFileError::Invalid`] at the table's line, with the key `solver.KEY` or
+/// `dynamics.KEY`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refusal {
+    /// The key inside its table (`backend`, `accuracy`, `scheme`, …).
+    pub key: String,
+    /// Its value, printed (names quoted).
+    pub value: String,
+    /// Why it is refused.
+    pub reason: String,
+}
+
+/// The checks of `[solver]` and `[dynamics]` that need the solver's vocabulary, run while a
+/// scene file loads ([`load_with`]). The harness implements it with the run settings' rules;
+/// [`NoRunRules`] accepts every value.
+pub trait RunRules {
+    /// Checks `[solver]`: the first refused key, if any.
+    fn check_solver(&self, solver: &SolverSpec) -> Result<(), Refusal>;
+    /// Checks `[dynamics]` after its `dt` and `steps`, which the loader checks itself (> 0,
+    /// ≥ 1): the first refused key, if any.
+    fn check_dynamics(&self, dynamics: &DynamicsSpec) -> Result<(), Refusal>;
+}
+
+/// Rules that accept every `[solver]` and `[dynamics]` value (what [`load`] and [`parse`]
+/// use).
+pub struct NoRunRules;
+
+impl RunRules for NoRunRules {
+    fn check_solver(&self, _: &SolverSpec) -> Result<(), Refusal> {
+        Ok(())
+    }
+    fn check_dynamics(&self, _: &DynamicsSpec) -> Result<(), Refusal> {
+        Ok(())
+    }
+}
+
+/// Reads and builds a scene file, without the solver's checks of `[solver]` and `[dynamics]`
+/// ([`NoRunRules`]; a run loads with [`load_with`] and the solver's rules).
 pub fn load(path: &Path) -> Result<SceneFile, SceneFileError> {
+    load_with(path, &NoRunRules)
+}
+
+/// Reads and builds a scene file, checking `[solver]` and `[dynamics]` with `rules`.
+pub fn load_with(path: &Path, rules: &dyn RunRules) -> Result<SceneFile, SceneFileError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
         path: path.display().to_string(),
         source,
     })?;
-    parse(&text, path)
+    parse_with(&text, path, rules)
 }
 
 /// Builds a scene from the text of a scene file; `path` names it in errors and its directory
-/// resolves the mesh paths.
+/// resolves the mesh paths. Without the solver's checks, like [`load`].
 pub fn parse(text: &str, path: &Path) -> Result<SceneFile, SceneFileError> {
+    parse_with(text, path, &NoRunRules)
+}
+
+/// [`parse`], checking `[solver]` and `[dynamics]` with `rules`.
+pub fn parse_with(
+    text: &str,
+    path: &Path,
+    rules: &dyn RunRules,
+) -> Result<SceneFile, SceneFileError> {
     let ctx = Ctx {
         path: path.display().to_string(),
         text,
         dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        rules,
     };
     let spec: FileSpec = toml::from_str(text).map_err(|e| SceneFileError::Toml {
         path: ctx.path.clone(),
@@ -255,11 +315,12 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneFile, SceneFileError> {
 }
 
 /// The scene file being read: its name for errors, its text for line numbers, its
-/// directory for mesh paths.
+/// directory for mesh paths, the rules of `[solver]` and `[dynamics]`.
 struct Ctx<'a> {
     path: String,
     text: &'a str,
     dir: PathBuf,
+    rules: &'a dyn RunRules,
 }
 
 /// A body after loading, in its own numbering.

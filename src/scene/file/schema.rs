@@ -1,13 +1,16 @@
 //! The TOML schema of a scene file (serde structs; docs/scene-files.md). Spans
 //! ([`toml::Spanned`]) keep the lines errors name.
+//!
+//! `[solver]` and `[dynamics]` are plain data here: names and numbers as the file gives them.
+//! What they mean for a run (the run settings and their rules, the accuracy presets, the
+//! time-stepping schemes) belongs to the solver; the harness checks them through
+//! [`RunRules`](super::RunRules) and applies them to the run.
 
 use crate::scene::mesh::BodyKind;
-use crate::solve::outer::Pruning;
-use crate::solve::settings::RunSettings;
 use toml::Spanned;
 
 /// `[solver]`: the settings of `contactlab run` (each optional; a flag given on the command
-/// line overrides the file).
+/// line overrides the file). Checked by a [`RunRules`](super::RunRules) while the file loads.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
@@ -16,7 +19,7 @@ pub struct SolverSpec {
     /// `low`, `default` or `high`.
     pub accuracy: Option<String>,
     /// `lazy`, `trust-region` or `all-pairs`.
-    pub pruning: Option<Pruning>,
+    pub pruning: Option<PruningName>,
     /// Maximum outer iterations (≥ 1).
     pub max_outer: Option<usize>,
     /// Relative energy tolerance of the outer stopping rule (> 0).
@@ -31,41 +34,27 @@ pub struct SolverSpec {
     pub trust_delta0: Option<f64>,
     /// Warm-start the QP duals.
     pub warm_start: Option<bool>,
+    /// The inner steps' Newton model: `shifted` or `projected`.
+    pub newton_model: Option<String>,
 }
 
-impl SolverSpec {
-    /// Writes the keys the file gives into `settings` (all but `accuracy`, a name checked and
-    /// parsed by the caller).
-    pub fn fill(&self, settings: &mut RunSettings) {
-        let s = settings;
-        if let Some(v) = &self.backend {
-            s.backend = v.clone();
-        }
-        if let Some(v) = self.pruning {
-            s.pruning = v;
-        }
-        if let Some(v) = self.max_outer {
-            s.max_outer = v;
-        }
-        if let Some(v) = self.max_inner {
-            s.max_inner = v;
-        }
-        if let Some(v) = self.lazy_start {
-            s.lazy_start = v;
-        }
-        if let Some(v) = self.trust_delta0 {
-            s.trust_delta0 = v;
-        }
-        if let Some(v) = self.warm_start {
-            s.warm_start = v;
-        }
-        s.tol_j = self.tol_j.or(s.tol_j);
-        s.qp_tol = self.qp_tol.or(s.qp_tol);
-    }
+/// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
+/// in the same order, so that serde's messages list them the same way). The harness maps each
+/// to its pruning mode with an exhaustive match.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PruningName {
+    /// `all-pairs`.
+    AllPairs,
+    /// `lazy`.
+    Lazy,
+    /// `trust-region`.
+    TrustRegion,
 }
 
 /// `[dynamics]`: defaults of `contactlab run FILE --dynamic` (each optional; `--dt`,
-/// `--steps`, `--scheme` override).
+/// `--steps`, `--scheme` override). `dt` and `steps` are checked here; `scheme`, a name of
+/// the solver's, by a [`RunRules`](super::RunRules).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DynamicsSpec {

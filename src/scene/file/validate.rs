@@ -1,10 +1,10 @@
 //! The scene-level keys of a scene file: `dim`, `eps`, `gravity`, `name`, `[solver]`,
-//! `[dynamics]`, and the `[[body]]` list (names unique), before assembly.
+//! `[dynamics]`, and the `[[body]]` list (names unique), before assembly. `[solver]` and
+//! `[dynamics].scheme` are checked by the loader's [`RunRules`](super::RunRules).
 
 use super::assemble::Header;
 use super::schema::{DynamicsSpec, FileSpec, SolverSpec};
 use super::{fmt_list, Ctx, SceneFile, SceneFileError};
-use crate::solve::settings::RunSettings;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -43,7 +43,7 @@ impl Ctx<'_> {
             Some(s) => {
                 let line = self.line(s.span().start);
                 let s = s.into_inner();
-                self.check_solver(&s, line)?;
+                self.refused(self.rules.check_solver(&s), line, "solver")?;
                 s
             }
         };
@@ -65,16 +65,7 @@ impl Ctx<'_> {
                 if d.steps == Some(0) {
                     return Err(self.invalid(line, "dynamics.steps", 0, "must be ≥ 1"));
                 }
-                if let Some(sc) = &d.scheme {
-                    if crate::solve::dynamics::Scheme::from_name(sc).is_none() {
-                        return Err(self.invalid(
-                            line,
-                            "dynamics.scheme",
-                            format!("{sc:?}"),
-                            "expected one of euler, newmark",
-                        ));
-                    }
-                }
+                self.refused(self.rules.check_dynamics(&d), line, "dynamics")?;
                 d
             }
         };
@@ -136,29 +127,14 @@ impl Ctx<'_> {
         self.assemble(header, loaded, specs, path)
     }
 
-    /// Checks `[solver]` with [`RunSettings::validate`] (the keys it leaves out at their
-    /// defaults) and its `accuracy` name.
-    pub(super) fn check_solver(&self, s: &SolverSpec, line: usize) -> Result<(), SceneFileError> {
-        let mut rs = RunSettings::default();
-        s.fill(&mut rs);
-        if let Err(e) = rs.validate() {
-            return Err(self.invalid(
-                line,
-                format!("solver.{}", e.key),
-                e.value,
-                e.rule.to_string(),
-            ));
-        }
-        if let Some(a) = &s.accuracy {
-            if crate::solve::settings::Accuracy::from_name(a).is_none() {
-                return Err(self.invalid(
-                    line,
-                    "solver.accuracy",
-                    format!("{a:?}"),
-                    "expected one of low, default, high",
-                ));
-            }
-        }
-        Ok(())
+    /// A [`Refusal`](super::Refusal) of the table `table` (at `line`) as the error naming
+    /// `table.KEY`.
+    fn refused(
+        &self,
+        r: Result<(), super::Refusal>,
+        line: usize,
+        table: &str,
+    ) -> Result<(), SceneFileError> {
+        r.map_err(|e| self.invalid(line, format!("{table}.{}", e.key), e.value, e.reason))
     }
 }
