@@ -113,7 +113,7 @@ const CORPUS: &[(&str, &[&str])] = &[
     (
         "solver_bad_newton_model.toml",
         &[
-            ":5:",
+            ":4:",
             "solver.newton_model",
             "\"exact\"",
             "shifted, projected",
