@@ -83,8 +83,8 @@ impl Default for InnerSettings {
 /// mode with curvature `O(C/(V·N))`, the shift does not add the `~C/V` stiffness per vertex of
 /// an element-wise projection. The rank-one terms `c wwᵀ` are then weakened to
 /// `max(1e-6·c, c − σ/‖w‖²)`, so that along `w` (the direction of the negative mode of a gas
-/// term's `−C/V ∇²V`) the model is exact again: the model is `∇²J + σ(I − Σ ŵŵᵀ)` when the
-/// `w` have disjoint supports.
+/// term's `−C/V ∇²V`) the model is exact again where the floor does not bind: the
+/// model is then `∇²J + σ(I − Σ ŵŵᵀ)` when the `w` have disjoint supports.
 #[derive(Clone, Debug, Default)]
 pub struct ModelShift {
     /// The last shift chosen.
@@ -97,22 +97,26 @@ pub struct ModelShift {
 }
 
 impl ModelShift {
-    /// The shift for the free-dof upper triplets `ptrip` (every diagonal entry present).
-    fn choose(
-        &mut self,
-        nf: usize,
-        ptrip: &[(usize, usize, f64)],
-        maxdiag: f64,
-    ) -> Result<f64, QpError> {
-        let mut m = CscMatrix::from_triplets(nf, nf, ptrip)?;
+    /// Chooses the shift for `p` (upper CSC; its leading `nf × nf` block is `H + ρI`, every
+    /// diagonal entry present, and no entry couples it to the columns after it) and adds it to
+    /// that block's diagonal in place.
+    fn apply(&mut self, p: &mut CscMatrix, nf: usize, maxdiag: f64) -> Result<f64, QpError> {
+        let end = p.colptr[nf];
+        let mut m = CscMatrix {
+            nrows: nf,
+            ncols: nf,
+            colptr: p.colptr[..=nf].to_vec(),
+            rowval: p.rowval[..end].to_vec(),
+            nzval: p.nzval[..end].to_vec(),
+        };
         let diag: Vec<usize> = (0..nf)
             .map(|j| {
                 (m.colptr[j]..m.colptr[j + 1])
-                    .find(|&p| m.rowval[p] == j)
+                    .find(|&k| m.rowval[k] == j)
                     .expect("the proximal term puts every diagonal entry in the pattern")
             })
             .collect();
-        let base: Vec<f64> = diag.iter().map(|&p| m.nzval[p]).collect();
+        let base: Vec<f64> = diag.iter().map(|&k| m.nzval[k]).collect();
         if !self.sym.as_ref().is_some_and(|s| s.matches(&m)) {
             self.sym = LdlSymbolic::new(&m);
         }
@@ -136,6 +140,11 @@ impl ModelShift {
             if SparseLdl::numeric(&m, sym).is_some() {
                 self.sigma = sigma;
                 self.max_sigma = self.max_sigma.max(sigma);
+                if sigma > 0.0 {
+                    for &k in &diag {
+                        p.nzval[k] = m.nzval[k];
+                    }
+                }
                 return Ok(sigma);
             }
             sigma = if sigma == 0.0 { floor } else { 4.0 * sigma };
@@ -269,35 +278,27 @@ pub fn build_qp(
     for c in 0..nf {
         ptrip.push((c, c, rho));
     }
-    let sigma = if energy.model_is_psd(settings.hessian_model) {
-        0.0
-    } else {
-        shift.choose(nf, &ptrip, maxdiag)?
-    };
-    if sigma > 0.0 {
-        for c in 0..nf {
-            ptrip.push((c, c, sigma));
+    for (k, r) in h.rank_one.iter().enumerate() {
+        ptrip.push((nf + k, nf + k, r.coef));
+    }
+    let mut p = CscMatrix::from_triplets(n, n, &ptrip)?;
+    if !energy.model_is_psd(settings.hessian_model) {
+        let sigma = shift.apply(&mut p, nf, maxdiag)?;
+        if sigma > 0.0 {
+            for (k, r) in h.rank_one.iter().enumerate() {
+                let ww: f64 =
+                    r.w.iter()
+                        .filter(|(dof, _)| dofs.col[*dof] != usize::MAX)
+                        .map(|(_, w)| w * w)
+                        .sum();
+                if ww > 0.0 {
+                    // The auxiliary column holds its diagonal entry only. Kept positive so
+                    // that P stays definite (Uzawa factorizes it).
+                    p.nzval[p.colptr[nf + k]] = (r.coef - sigma / ww).max(1e-6 * r.coef);
+                }
+            }
         }
     }
-    for (k, r) in h.rank_one.iter().enumerate() {
-        let coef = if sigma > 0.0 {
-            let ww: f64 =
-                r.w.iter()
-                    .filter(|(dof, _)| dofs.col[*dof] != usize::MAX)
-                    .map(|(_, w)| w * w)
-                    .sum();
-            if ww > 0.0 {
-                // Kept positive so that P stays definite (Uzawa factorizes it).
-                (r.coef - sigma / ww).max(1e-6 * r.coef)
-            } else {
-                r.coef
-            }
-        } else {
-            r.coef
-        };
-        ptrip.push((nf + k, nf + k, coef));
-    }
-    let p = CscMatrix::from_triplets(n, n, &ptrip)?;
     let mut q = vec![0.0; n];
     for (dof, &c) in dofs.col.iter().enumerate() {
         if c != usize::MAX {
@@ -620,9 +621,11 @@ mod tests {
     #[test]
     fn model_shift_is_zero_on_a_positive_definite_model() {
         // eigenvalues 2 − 2cos(kπ/(n+1)) > 0
-        let t = tridiagonal(10, 2.0, -1.0);
+        let mut m = CscMatrix::from_triplets(10, 10, &tridiagonal(10, 2.0, -1.0)).unwrap();
+        let before = m.nzval.clone();
         let mut shift = ModelShift::default();
-        assert_eq!(shift.choose(10, &t, 2.0).unwrap(), 0.0);
+        assert_eq!(shift.apply(&mut m, 10, 2.0).unwrap(), 0.0);
+        assert_eq!(m.nzval, before);
         assert_eq!(shift.factorizations, 1);
     }
 
@@ -631,10 +634,11 @@ mod tests {
         // eigenvalues a + 2b·cos(kπ/(n+1)); with a = 1, b = −1 the smallest is
         // 1 − 2cos(π/11) ≈ −0.919
         let n = 10;
-        let t = tridiagonal(n, 1.0, -1.0);
+        let t = CscMatrix::from_triplets(n, n, &tridiagonal(n, 1.0, -1.0)).unwrap();
         let lambda_min = 1.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
         let mut shift = ModelShift::default();
-        let sigma = shift.choose(n, &t, 1.0).unwrap();
+        let mut m = t.clone();
+        let sigma = shift.apply(&mut m, n, 1.0).unwrap();
         assert!(
             sigma > -lambda_min,
             "σ = {sigma} does not cover λ_min = {lambda_min}"
@@ -643,13 +647,20 @@ mod tests {
             sigma <= 4.0 * -lambda_min,
             "σ = {sigma} more than 4·|λ_min|"
         );
+        // the shift is on the diagonal of the matrix, nowhere else
+        for j in 0..n {
+            for k in t.colptr[j]..t.colptr[j + 1] {
+                let add = if t.rowval[k] == j { sigma } else { 0.0 };
+                assert_eq!(m.nzval[k], t.nzval[k] + add);
+            }
+        }
         // the next step starts from σ/4, which fails, and climbs back to the same σ
-        let again = shift.choose(n, &t, 1.0).unwrap();
+        let again = shift.apply(&mut t.clone(), n, 1.0).unwrap();
         assert_eq!(again, sigma);
         // a model that became definite brings the shift back to 0 within a few steps
-        let pd = tridiagonal(n, 3.0, -1.0);
+        let pd = CscMatrix::from_triplets(n, n, &tridiagonal(n, 3.0, -1.0)).unwrap();
         let mut steps = 0;
-        while shift.choose(n, &pd, 3.0).unwrap() > 0.0 {
+        while shift.apply(&mut pd.clone(), n, 3.0).unwrap() > 0.0 {
             steps += 1;
             assert!(steps < 40, "the shift does not fall back to 0");
         }
