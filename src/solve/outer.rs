@@ -5,11 +5,10 @@
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
 //! frames or a progress line.
 
-use crate::contact::broad_phase::point_edge_near;
+use crate::contact::motion::MotionSearch;
 use crate::contact::MinDistance;
 use crate::contact::{
-    all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
-    PairRows,
+    all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
 };
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
@@ -274,44 +273,25 @@ pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
     *l.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// The lazy-row oracle at ψ (see [`RowOracle`]): a row `n·(φ(p) − φ(q))` of T(ψ) moves by at
-/// most `D_p + D_q` from its value at ψ, which is at least the pair's distance at ψ, with
-/// `D_v = |φ(v) − ψ(v)|`. In 2D (point–edge rows) only pairs closer than
-/// `ε + δ + D_x + max(D_a0, D_a1)` at ψ can be violated by φ, and the broad phase finds exactly
-/// those (per-vertex and per-edge radii); in 3D the radius is uniform,
-/// `ε + δ + 2 max_v D_v`. The rows below `ε + δ` at φ are returned.
+/// The lazy-row oracle at ψ (see [`RowOracle`]): the rows of T(ψ) below `ε + δ` at φ that are
+/// not carried yet, found by relative displacement ([`MotionSearch`]: a pair can only be
+/// violated when its elements' relative motion since ψ can close its gap at ψ; the trees at ψ
+/// are built at the first call and reused for the whole outer step). Of those, per point (or
+/// first edge) only the most violated pair is returned.
 fn lazy_oracle<'a>(
     mesh: &'a Mesh,
     psi: &'a [f64],
     eps_qp: f64,
 ) -> impl FnMut(&[f64], &[PairRows]) -> Vec<PairRows> + 'a {
     let mut carried: HashSet<ContactPair> = HashSet::new();
+    let mut search: Option<Search> = None;
     move |phi: &[f64], rows: &[PairRows]| {
         if carried.len() != rows.len() {
             carried = rows.iter().map(|r| r.pair).collect();
         }
-        let disp = displacements(mesh.dim, psi, phi);
-        let candidates: Vec<ContactPair> = if mesh.dim == 2 {
-            let rv: Vec<f64> = disp.iter().map(|d| d * (1.0 + 1e-12) + eps_qp).collect();
-            let re: Vec<f64> = mesh
-                .edges
-                .iter()
-                .map(|e| disp[e[0]].max(disp[e[1]]) * (1.0 + 1e-12))
-                .collect();
-            point_edge_near(mesh, psi, &rv, &re, true)
-                .into_iter()
-                .map(|p| p.pair.into())
-                .collect()
-        } else {
-            let dmax = disp.iter().fold(0.0f64, |m, &d| m.max(d));
-            near_pairs(mesh, psi, eps_qp + 2.0 * dmax * (1.0 + 1e-12), true)
-        };
-        let violated: Vec<PairRows> = candidates
-            .par_iter()
-            .filter(|p| !carried.contains(p))
-            .filter_map(|&p| pair_rows(mesh, psi, p))
-            .filter(|r| r.min_value(phi) < eps_qp)
-            .collect();
+        let search = search.get_or_insert_with(|| Search::new(mesh, psi));
+        let mut violated = search.violated(mesh, psi, phi, eps_qp);
+        violated.retain(|r| !carried.contains(&r.pair));
         // Per point (or first edge), only the most violated pair: the QP solved again with
         // these moves the point, and the oracle is asked again about the next point found.
         let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
@@ -331,6 +311,29 @@ fn lazy_oracle<'a>(
         let added: Vec<PairRows> = pick.into_iter().map(|i| violated[i]).collect();
         carried.extend(added.iter().map(|r| r.pair));
         added
+    }
+}
+
+/// [`MotionSearch`] in the mesh's dimension.
+enum Search {
+    Two(MotionSearch<2>),
+    Three(MotionSearch<3>),
+}
+
+impl Search {
+    fn new(mesh: &Mesh, psi: &[f64]) -> Search {
+        if mesh.dim == 2 {
+            Search::Two(MotionSearch::new(mesh, psi))
+        } else {
+            Search::Three(MotionSearch::new(mesh, psi))
+        }
+    }
+
+    fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
+        match self {
+            Search::Two(s) => s.violated(mesh, psi, phi, eps_qp),
+            Search::Three(s) => s.violated(mesh, psi, phi, eps_qp),
+        }
     }
 }
 
