@@ -37,6 +37,7 @@ fn diagnose(n: usize, backend: &str) -> contactlab::harness::diagnostics::Conver
         &scene.mesh,
         &scene.energy,
         &res.x,
+        &res.psi,
         scene.eps,
         scene.h,
         &res.last_rows,

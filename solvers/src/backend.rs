@@ -128,6 +128,9 @@ pub struct QpSettings {
     pub max_iter: usize,
     /// Wall-clock limit in seconds (`f64::INFINITY` for none).
     pub time_limit_s: f64,
+    /// Remove zero rows and positive multiples of other rows before the solve and map the
+    /// duals back ([`crate::presolve`]); applied by [`crate::backend_from_name`].
+    pub presolve: bool,
 }
 
 impl Default for QpSettings {
@@ -137,6 +140,7 @@ impl Default for QpSettings {
             eps_rel: 1e-9,
             max_iter: 100_000,
             time_limit_s: f64::INFINITY,
+            presolve: true,
         }
     }
 }

@@ -128,10 +128,14 @@ pub fn backend(name: &str) -> Option<&'static Backend> {
     BACKENDS.iter().find(|b| b.name == name)
 }
 
-/// Builds a backend from its name and the common settings (validated first).
+/// Builds a backend from its name and the common settings (validated first), behind the row
+/// presolve of [`crate::presolve`] when `settings.presolve`.
 pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn QpBackend>, QpError> {
     settings.validate()?;
     match backend(name) {
+        Some(b) if settings.presolve => Ok(Box::new(crate::presolve::Presolved::new((b.build)(
+            settings.clone(),
+        )))),
         Some(b) => Ok((b.build)(settings.clone())),
         None => Err(QpError::UnknownBackend(name.to_string())),
     }

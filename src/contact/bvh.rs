@@ -660,9 +660,9 @@ mod tests {
             let mut got = ta.dual(Some(&tb), &keep_ab, &leaf_ab);
             got.sort_unstable();
             let mut want = Vec::new();
-            for p in 0..a.len() {
-                for q in 0..b.len() {
-                    if ov(&a[p], &b[q]) {
+            for (p, bp) in a.iter().enumerate() {
+                for (q, bq) in b.iter().enumerate() {
+                    if ov(bp, bq) {
                         want.push((p as u32, q as u32));
                     }
                 }
@@ -683,9 +683,9 @@ mod tests {
             assert_eq!(got, serial, "thread-count independent, n = {n}");
             got.sort_unstable();
             let mut want = Vec::new();
-            for p in 0..a.len() {
-                for q in p + 1..a.len() {
-                    if ov(&a[p], &a[q]) {
+            for (p, bp) in a.iter().enumerate() {
+                for (q, bq) in a.iter().enumerate().skip(p + 1) {
+                    if ov(bp, bq) {
                         want.push((p as u32, q as u32));
                     }
                 }

@@ -80,6 +80,7 @@ pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDia
             &scene.mesh,
             &scene.energy,
             &res.x,
+            &res.psi,
             scene.eps,
             scene.h,
             &res.last_rows,

@@ -350,8 +350,12 @@ fn max_abs(v: &[f64]) -> f64 {
 /// Lemma 5.4 / 5.6 diagnostics at a converged configuration `x` (= φ_h) of a run whose last
 /// sub-problem had rows `last_rows` and duals `last_mult` (docs/method.md, "Diagnostics of a converged run").
 ///
-/// * **Rows** of T(φ_h): every contact pair closer than `ε + active_tol + 1e-9·ε`, built at
-///   ψ = φ_h; a row is active when its value is at most `ε + active_tol`.
+/// * **Rows** of T(ψ), `psi` the last sub-problem's ψ (`RunResult::psi`; φ_h ≈ ψ at a fixed
+///   point): every contact pair closer than `ε + active_tol + 1e-9·ε` at φ_h; a row is active
+///   when its value at φ_h is at most `ε + active_tol`. Built at ψ rather than at φ_h because
+///   after the polish at ε (docs/method.md, "The row margin") these are the rows φ_h meets
+///   with equality: at a contact on a polygon's vertex the normal at φ_h turns by about
+///   displacement/ε, so rows rebuilt at φ_h move by (h/ε)·δ and fall out of the active band.
 /// * **Canonical duals** (docs/method.md, canonical duals): with `A` the active rows' gradients and
 ///   `g = J'(φ_h)` on the free dofs, the duals minimize `½|Aᵀμ − g|² + ½τ|μ|²` over `μ ≥ 0`,
 ///   `τ = tikhonov_rel · max diag(AAᵀ)`: a non-negative least-squares problem whose solution
@@ -368,6 +372,7 @@ pub fn converged_diagnostics(
     mesh: &Mesh,
     energy: &TotalEnergy,
     x: &[f64],
+    psi: &[f64],
     eps: f64,
     h: f64,
     last_rows: &[PairRows],
@@ -397,10 +402,11 @@ pub fn converged_diagnostics(
         }
     }
 
-    // Rows of T(φ_h) near contact.
+    // Rows of T(ψ) near contact at φ_h, ψ the last sub-problem's (φ_h ≈ ψ at a fixed point;
+    // after the polish at ε, the rows φ_h satisfies with equality).
     let reach = eps + settings.active_tol + 1e-9 * eps;
     let near = near_pairs(mesh, x, reach, true);
-    let rows = rows_for(mesh, x, &near).ok_or(DiagnosticsError::ZeroDistance)?;
+    let rows = rows_for(mesh, psi, &near).ok_or(DiagnosticsError::ZeroDistance)?;
     let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row)
     let mut active_flags = vec![[false; 4]; rows.len()];
     for (k, r) in rows.iter().enumerate() {
@@ -507,7 +513,7 @@ pub fn converged_diagnostics(
             first,
             second,
             rows: r.len,
-            distance: r.distance,
+            distance: pair_rows(mesh, x, r.pair).map_or(0.0, |q| q.distance),
             weight: r.weight,
             active: active_flags[k],
             mu: mu[k],

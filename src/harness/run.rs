@@ -184,6 +184,8 @@ struct Summary {
     backend_iterations: usize,
     initial_energy: f64,
     final_energy: f64,
+    /// The final polish at ε (docs/method.md, "The row margin"), when it ran.
+    polish: Option<crate::solve::outer::Polish>,
     min_distance: f64,
     closest_pair: String,
     wall_time_s: f64,
@@ -535,6 +537,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         backend_iterations: res.backend_iterations,
         initial_energy: energies[0].1,
         final_energy: res.energy,
+        polish: res.polish,
         min_distance: res.min_distance.distance,
         closest_pair: res.min_distance.pair.to_string(),
         wall_time_s: res.wall_time_s,

@@ -107,6 +107,8 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
     settings.trust.delta0 = a.trust_delta0;
     settings.inner.max_inner = a.max_inner;
     let mut first = None;
+    // Per-run totals over the outer steps: (pairs, assembly, solve) seconds and QP solves.
+    let mut total = (0.0, 0.0, 0.0, 0usize);
     let res = run(
         &scene.mesh,
         &scene.energy,
@@ -118,6 +120,10 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
             if r.iteration == 1 {
                 first = Some(r.clone());
             }
+            total.0 += r.t_pairs_s;
+            total.1 += r.t_assembly_s;
+            total.2 += r.t_solve_s;
+            total.3 += r.inner_iterations + r.lazy_rounds;
         },
     )?;
     let f = first.context("no outer step was taken")?;
@@ -138,10 +144,14 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         "inner_iterations": if a.max_outer == 1 { f.inner_iterations } else { res.inner_iterations },
         "pairs": f.pairs,
         "rows": f.rows,
-        "t_pairs_s": f.t_pairs_s,
-        "t_assembly_s": f.t_assembly_s,
-        "t_solve_s": f.t_solve_s,
-        "t_step_s": f.t_pairs_s + f.t_assembly_s + f.t_solve_s,
+        "step1_t_pairs_s": f.t_pairs_s,
+        "step1_t_assembly_s": f.t_assembly_s,
+        "step1_t_solve_s": f.t_solve_s,
+        "step1_t_step_s": f.t_pairs_s + f.t_assembly_s + f.t_solve_s,
+        "total_t_pairs_s": total.0,
+        "total_t_assembly_s": total.1,
+        "total_t_solve_s": total.2,
+        "qp_solves": total.3,
         "wall_time_s": res.wall_time_s,
         "peak_rss_mb": peak_rss_mb(),
         "final_energy": res.energy,
@@ -330,7 +340,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         eprintln!(
             "{} (step {} s, wall {} s, peak {} MiB)",
             row.status,
-            or_dash(&row.t_step_s),
+            or_dash(&row.step1_t_step_s),
             or_dash(&row.wall_time_s),
             or_dash(&row.peak_rss_mb),
         );
@@ -362,7 +372,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         let pts: Vec<(f64, f64)> = done
             .iter()
             .filter(|r| label_of(r) == m)
-            .filter_map(|r| Some((r.vertices.parse().ok()?, r.t_step_s.parse().ok()?)))
+            .filter_map(|r| Some((r.vertices.parse().ok()?, r.step1_t_step_s.parse().ok()?)))
             .collect();
         let slope = loglog_slope(&pts);
         let label = match slope {

@@ -14,7 +14,9 @@ use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
-use crate::solve::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
+use crate::solve::subproblem::{
+    solve_subproblem, DofMap, InnerSettings, RowOracle, SubproblemResult, TrustBox,
+};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -104,6 +106,10 @@ pub struct OuterSettings {
     /// overshoot by one QP solve. On expiry the run stops with [`RunStatus::TimeLimit`] and
     /// returns its last accepted (admissible) iterate.
     pub time_limit_s: Option<f64>,
+    /// After convergence, solve the last sub-problem again with its rows at ε itself (no
+    /// margin δ), so that the reported state and energy are those of rows at ε, not ε + δ
+    /// (docs/method.md, "The row margin"). Not an outer step: `history.csv` ends before it.
+    pub polish: bool,
 }
 
 impl Default for OuterSettings {
@@ -116,6 +122,7 @@ impl Default for OuterSettings {
             trust: TrustSettings::default(),
             inner: InnerSettings::default(),
             time_limit_s: None,
+            polish: true,
         }
     }
 }
@@ -240,6 +247,21 @@ pub struct RunResult {
     pub multipliers: Vec<[f64; 4]>,
     /// Wall time of the whole loop.
     pub wall_time_s: f64,
+    /// The final polish at ε ([`OuterSettings::polish`]), when it ran.
+    pub polish: Option<Polish>,
+    /// The ψ of the last sub-problem (the rows of `last_rows` are those of T(ψ)).
+    pub psi: Vec<f64>,
+}
+
+/// The outcome of the final polish at ε (docs/method.md, "The row margin").
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Polish {
+    /// J after the polish minus J before (≤ 0; 0 when not accepted).
+    pub energy_change: f64,
+    /// Its inner steps (also counted in the run's total).
+    pub inner_iterations: usize,
+    /// Whether its iterate was kept: admissible, its QPs solved, J not raised.
+    pub accepted: bool,
 }
 
 /// Round-off allowance of the exact admissibility check: `16 u · max(1, max |x_i|)`, `u` the
@@ -334,6 +356,151 @@ impl Search {
             Search::Two(s) => s.violated(mesh, psi, phi, eps_qp),
             Search::Three(s) => s.violated(mesh, psi, phi, eps_qp),
         }
+    }
+}
+
+/// What every outer step of one run shares.
+struct StepContext<'a> {
+    mesh: &'a Mesh,
+    energy: &'a dyn Objective,
+    eps: f64,
+    dofs: &'a DofMap,
+    settings: &'a OuterSettings,
+    /// The all-pairs mode's pairs (empty otherwise).
+    all_pairs: &'a [ContactPair],
+    /// Median contact edge length at φ_0.
+    hbar: f64,
+    roundoff: f64,
+    deadline: Option<Instant>,
+}
+
+/// One outer step: its sub-problem, its record, the exact minimum distance of its iterate, and
+/// whether the trust box bound it.
+struct Step {
+    sub: SubproblemResult,
+    record: IterationRecord,
+    min_distance: MinDistance,
+    box_active: bool,
+}
+
+impl StepContext<'_> {
+    /// The step `k` from ψ = `x`: the sub-problem min J over T(ψ) with rows at `ε + margin`
+    /// from the inner start `start` (ψ itself, or a point of T(ψ) for the polish; `delta`: the
+    /// trust half-width; `d_prev`: the last step's largest displacement; `warm`: the last
+    /// multipliers by pair), checked exactly.
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &self,
+        x: &[f64],
+        start: &[f64],
+        k: usize,
+        margin: f64,
+        delta: f64,
+        d_prev: f64,
+        warm: &HashMap<ContactPair, [f64; 4]>,
+        backend: &mut dyn QpBackend,
+    ) -> Result<Step, RunError> {
+        let (mesh, eps, settings) = (self.mesh, self.eps, self.settings);
+        let eps_qp = eps + margin;
+        // Inside the box |φ − ψ|∞ ≤ δ a vertex moves by at most √d·δ, a row by twice that.
+        let box_reach = if mesh.dim == 2 {
+            2.0 * std::f64::consts::SQRT_2
+        } else {
+            2.0 * 3f64.sqrt()
+        };
+        let tp = Instant::now();
+        // The pairs given rows up front (the all-fixed pairs are constant: checked once at the
+        // start, never given rows).
+        let pairs: Vec<ContactPair> = match settings.pruning {
+            Pruning::AllPairs => self.all_pairs.to_vec(),
+            // Start from the pairs that the last step's displacement could reach, within
+            // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
+            Pruning::Lazy => {
+                let r = eps_qp + d_prev.min(settings.lazy_start * self.hbar);
+                near_pairs(mesh, x, r, true)
+            }
+            // Inside the box a row moves by at most 2√d·δ: farther pairs cannot be violated.
+            Pruning::TrustRegion => {
+                let r = eps_qp + box_reach * delta * (1.0 + 1e-9);
+                near_pairs(mesh, x, r, true)
+            }
+        };
+        let rows0 = rows_for(mesh, x, &pairs).expect("admissible ψ has positive distances");
+        let t_pairs_s = tp.elapsed().as_secs_f64();
+        let trust =
+            (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: x, delta });
+        let mut oracle = lazy_oracle(mesh, x, eps_qp);
+        let mut inner = settings.inner.clone();
+        // The sub-problem's rows are at ε + margin_rel·ε + margin_abs.
+        if margin == 0.0 {
+            inner.margin_rel = 0.0;
+            inner.margin_abs = 0.0;
+        }
+        let sub = solve_subproblem(
+            mesh,
+            self.energy,
+            self.dofs,
+            rows0,
+            start,
+            eps,
+            trust,
+            (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
+            Some(warm),
+            backend,
+            &inner,
+            self.deadline,
+        )?;
+        let box_active = trust.is_some_and(|tb| {
+            let dmax = x
+                .iter()
+                .zip(&sub.y)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            dmax >= (1.0 - 1e-3) * tb.delta
+        });
+        drop(oracle);
+        let tc = Instant::now();
+        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
+        let t_check = tc.elapsed().as_secs_f64();
+        // Active: within twice the run's margin of ε (the same count with or without it).
+        let act = 2.0 * (settings.inner.margin_rel * eps + settings.inner.margin_abs);
+        let active_rows = sub
+            .rows
+            .par_iter()
+            .map(|r| {
+                r.values(&sub.y)
+                    .iter()
+                    .take(r.len)
+                    .filter(|&&v| v - eps <= act)
+                    .count()
+            })
+            .sum();
+        let record = IterationRecord {
+            iteration: k,
+            energy: sub.energy,
+            min_distance: md.distance,
+            admissible: md.distance >= eps - self.roundoff,
+            pairs: sub.rows.len(),
+            rows: row_offsets(&sub.rows).1,
+            active_rows,
+            lazy_rounds: sub.lazy_rounds,
+            trust_delta: if settings.pruning == Pruning::TrustRegion {
+                delta
+            } else {
+                0.0
+            },
+            inner_iterations: sub.inner_iterations,
+            backend_iterations: sub.backend_iterations,
+            qp_status: sub.qp_status.as_str(),
+            t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
+            t_assembly_s: sub.t_assembly_s,
+            t_solve_s: sub.t_solve_s,
+        };
+        Ok(Step {
+            sub,
+            record,
+            min_distance: md,
+            box_active,
+        })
     }
 }
 
@@ -470,110 +637,42 @@ pub fn run_observed(
         last_rows: Vec::new(),
         multipliers: Vec::new(),
         wall_time_s: 0.0,
+        polish: None,
+        psi: Vec::new(),
     };
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
-    let eps_qp = eps + margin;
     // The last sub-problem's multipliers by pair: the next step's warm start.
     let mut last_mult: HashMap<ContactPair, [f64; 4]> = HashMap::new();
-    // Inside the box |φ − ψ|∞ ≤ δ a vertex moves by at most √d·δ, a row by twice that.
-    let box_reach = if mesh.dim == 2 {
-        2.0 * std::f64::consts::SQRT_2
-    } else {
-        2.0 * 3f64.sqrt()
+    let ctx = StepContext {
+        mesh,
+        energy,
+        eps,
+        dofs: &dofs,
+        settings,
+        all_pairs: &all_pairs,
+        hbar,
+        roundoff,
+        deadline,
     };
+    // The ψ of the last accepted step.
+    let mut psi = x.clone();
     for k in 1..=settings.max_outer {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             result.status = RunStatus::TimeLimit;
             break;
         }
-        let tp = Instant::now();
-        // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
-        // never given rows).
-        let pairs: Vec<ContactPair> = match settings.pruning {
-            Pruning::AllPairs => all_pairs.clone(),
-            // Start from the pairs that the last step's displacement could reach, within
-            // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
-            Pruning::Lazy => {
-                let r = eps_qp + d_prev.min(settings.lazy_start * hbar);
-                near_pairs(mesh, &x, r, true)
-            }
-            // Inside the box a row moves by at most 2√d·δ: farther pairs cannot be violated.
-            Pruning::TrustRegion => {
-                let r = eps_qp + box_reach * delta * (1.0 + 1e-9);
-                near_pairs(mesh, &x, r, true)
-            }
-        };
-        let rows0 = rows_for(mesh, &x, &pairs).expect("admissible ψ has positive distances");
-        let t_pairs_s = tp.elapsed().as_secs_f64();
-        let trust =
-            (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: &x, delta });
-        let mut oracle = lazy_oracle(mesh, &x, eps_qp);
-        let sub = solve_subproblem(
-            mesh,
-            energy,
-            &dofs,
-            rows0,
-            &x,
-            eps,
-            trust,
-            (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
-            Some(&last_mult),
-            backend,
-            &settings.inner,
-            deadline,
-        )?;
-        let box_active = trust.is_some_and(|tb| {
-            let dmax = x
-                .iter()
-                .zip(&sub.y)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            dmax >= (1.0 - 1e-3) * tb.delta
-        });
-        drop(oracle);
+        let step = ctx.step(&x, &x, k, margin, delta, d_prev, &last_mult, backend)?;
+        let sub = step.sub;
         result.outer_iterations = k;
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
-        let tc = Instant::now();
-        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
-        let t_check = tc.elapsed().as_secs_f64();
-        let active_rows = sub
-            .rows
-            .par_iter()
-            .map(|r| {
-                r.values(&sub.y)
-                    .iter()
-                    .take(r.len)
-                    .filter(|&&v| v - eps <= 2.0 * margin)
-                    .count()
-            })
-            .sum();
         observer.iteration(&OuterEvent {
-            record: &IterationRecord {
-                iteration: k,
-                energy: sub.energy,
-                min_distance: md.distance,
-                admissible: md.distance >= eps - roundoff,
-                pairs: sub.rows.len(),
-                rows: row_offsets(&sub.rows).1,
-                active_rows,
-                lazy_rounds: sub.lazy_rounds,
-                trust_delta: if settings.pruning == Pruning::TrustRegion {
-                    delta
-                } else {
-                    0.0
-                },
-                inner_iterations: sub.inner_iterations,
-                backend_iterations: sub.backend_iterations,
-                qp_status: sub.qp_status.as_str(),
-                t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
-                t_assembly_s: sub.t_assembly_s,
-                t_solve_s: sub.t_solve_s,
-            },
+            record: &step.record,
             x: &sub.y,
         });
-        if md.distance < eps - roundoff {
+        if !step.record.admissible {
             result.status = RunStatus::Inadmissible;
-            result.min_distance = md;
+            result.min_distance = step.min_distance;
             break;
         }
         if sub.energy > jx {
@@ -585,10 +684,10 @@ pub fn run_observed(
             .into_iter()
             .fold(0.0, f64::max)
             .max(1e-3 * hbar);
-        x = sub.y;
+        psi = std::mem::replace(&mut x, sub.y);
         jx = sub.energy;
         result.energy = jx;
-        result.min_distance = md;
+        result.min_distance = step.min_distance;
         last_mult = sub
             .rows
             .iter()
@@ -612,18 +711,47 @@ pub fn run_observed(
         if settings.pruning == Pruning::TrustRegion {
             // Grow δ while the box binds; shrink it when the step stays well inside.
             let t = &settings.trust;
-            if box_active {
+            if step.box_active {
                 delta = (2.0 * delta).min(t.delta_max * hbar);
             } else if d_prev < 0.25 * delta {
                 delta = (0.5 * delta).max(t.delta_min * hbar);
             }
         }
         // With a binding box the step is not argmin over T(ψ): do not stop on it.
-        if !box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
+        if !step.box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
             result.status = RunStatus::Converged;
             break;
         }
     }
+    // The polish (docs/method.md, "The row margin"): the last sub-problem, min J over T(ψ) of
+    // the last ψ, solved again from the converged state with its rows at ε itself, so that the
+    // reported state and energy carry no bias from the margin δ. Kept only if admissible,
+    // solved, and not above J.
+    if settings.polish && result.status == RunStatus::Converged {
+        let k = result.outer_iterations;
+        let step = ctx.step(&psi, &x, k, 0.0, delta, d_prev, &last_mult, backend)?;
+        let sub = step.sub;
+        result.inner_iterations += sub.inner_iterations;
+        result.backend_iterations += sub.backend_iterations;
+        let accepted = step.record.admissible
+            && sub.energy <= jx
+            && sub.qp_status == QpStatus::Solved
+            && !sub.line_search_failed
+            && !sub.timed_out;
+        result.polish = Some(Polish {
+            energy_change: if accepted { sub.energy - jx } else { 0.0 },
+            inner_iterations: sub.inner_iterations,
+            accepted,
+        });
+        if accepted {
+            x = sub.y;
+            result.energy = sub.energy;
+            result.min_distance = step.min_distance;
+            result.last_rows = sub.rows;
+            result.multipliers = sub.multipliers;
+        }
+    }
+    result.psi = psi;
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();
     observer.finish(&result);

@@ -505,7 +505,24 @@ pub fn solve_subproblem(
             } else {
                 // y and y + d both lie in T(ψ) (the oracle checked y + d against all of it),
                 // so the segment does; the line search still checks the carried rows exactly.
-                let mut t = 1.0;
+                // Where the rows carry no margin (the polish at ε), the backend's tolerance can
+                // leave rows of the full step just below ε: the step is then cut where the
+                // first of them reaches ε (rows are linear in the step length).
+                let mut t: f64 = 1.0;
+                if eps_qp == eps {
+                    let full: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + b).collect();
+                    for r in &rows {
+                        let (v0, v1) = (r.values(&y), r.values(&full));
+                        for i in 0..r.len {
+                            if v1[i] < eps && v0[i] > v1[i] {
+                                // a millionth of the slack left, above the round-off of the
+                                // row values, so that the exact check below passes
+                                t = t.min((v0[i] - eps) * (1.0 - 1e-6) / (v0[i] - v1[i]));
+                            }
+                        }
+                    }
+                    t = t.max(0.0);
+                }
                 let mut accepted = None;
                 for _ in 0..=settings.max_halvings {
                     let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
