@@ -96,11 +96,30 @@ fn sweep_rows_statuses_and_errors() {
                 get(row, "error")
             );
         } else {
-            assert_eq!(status, "converged", "{k}: {}", get(row, "error"));
+            // OSQP at `low` (1e-4) on the balloons at n = 20 stops on the stopping rule 3.5e-2
+            // above the others' energy, at a point whose certificate does not hold (measured
+            // κ = 0.125; it was reported `converged` before the certificate); every other run
+            // is certified.
+            let expected = if k.starts_with("balloons|n=20|") && k.contains("|osqp|low|") {
+                "fixed_point"
+            } else {
+                "converged"
+            };
+            assert_eq!(status, expected, "{k}: {}", get(row, "error"));
+            let kappa: f64 = get(row, "kappa").parse().unwrap();
+            let tol_kappa = get(row, "tol_j").parse::<f64>().unwrap().sqrt();
+            assert_eq!(
+                kappa <= tol_kappa,
+                status == "converged",
+                "{k}: κ = {kappa}"
+            );
             let pos: f64 = get(row, "position_error_h1").parse().unwrap();
             let ee: f64 = get(row, "energy_error").parse().unwrap();
             assert!(pos.is_finite() && pos >= 0.0 && ee >= 0.0, "{k}");
-            assert_eq!(get(row, "max_violation"), "0.0", "{k}");
+            // at most the exact check's round-off allowance, 16u·max(1, max|x_i|), the
+            // coordinates being in [−2, 2] here (docs/method.md, the outer loop)
+            let viol: f64 = get(row, "max_violation").parse().unwrap();
+            assert!((0.0..=32.0 * f64::EPSILON).contains(&viol), "{k}: {viol:e}");
             assert!(get(row, "residual_hm1").parse::<f64>().unwrap() >= 0.0);
         }
     }

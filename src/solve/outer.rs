@@ -1,5 +1,9 @@
 //! The outer loop of §3: `φ_{k+1} = argmin { J(φ) : φ ∈ T(φ_k) }`, stopped when
-//! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (docs/method.md).
+//! `|J(φ_{k+1}) − J(φ_k)| ≤ max(tol_J · E(φ_{k+1}), 64 u |J(φ_{k+1})|)` (docs/method.md, the
+//! stopping rule), with the energy scale of [`energy_scale`]. Where the rule stops the run,
+//! the minimality certificate ([`crate::solve::certificate`]) decides the status: `converged`
+//! when `κ ≤ tol_κ`, else `fixed_point` (or `line_search_failed` when the last sub-problem
+//! stalled in its line search). Every run ends with its certificate.
 //!
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
@@ -13,6 +17,8 @@ use crate::contact::{
 };
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
+use crate::solve::certificate::{certificate, Certificate, CertificateError};
+use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
@@ -85,8 +91,22 @@ impl Default for TrustSettings {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OuterSettings {
-    /// Relative energy tolerance of the stopping rule.
+    /// Relative energy tolerance of the stopping rule (relative to the energy scale of
+    /// [`energy_scale`]).
     pub tol_j: f64,
+    /// Tolerance of the minimality certificate: a run that meets the stopping rule is
+    /// `converged` when `κ ≤ tol_kappa`, else `fixed_point`. The presets use `√tol_J`
+    /// (docs/method.md).
+    pub tol_kappa: f64,
+    /// The backend's tolerance (`eps_abs`): with the row margin δ it sets the certificate's
+    /// distance tolerance ([`certificate_active_tol`]).
+    pub qp_tol: f64,
+    /// Hand the sub-problems' QPs to the backend in the run's own units (energy scale, reference
+    /// diameter; [`crate::solve::qp_units`]), so that the backends' absolute tolerances do not
+    /// depend on the scene's units. Off by default: it changes the QPs every backend sees, and
+    /// with QPs solved to a relative accuracy the creeping runs creep longer
+    /// (docs/known-gaps.md).
+    pub qp_in_run_units: bool,
     /// Maximum number of outer steps.
     pub max_outer: usize,
     /// Which pairs the sub-problems carry.
@@ -111,6 +131,9 @@ impl Default for OuterSettings {
     fn default() -> Self {
         OuterSettings {
             tol_j: 1e-10,
+            tol_kappa: 1e-5,
+            qp_tol: 1e-9,
+            qp_in_run_units: false,
             max_outer: 2000,
             pruning: Pruning::Lazy,
             lazy_start: 0.25,
@@ -125,8 +148,11 @@ impl Default for OuterSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunStatus {
-    /// The stopping rule was met.
+    /// The stopping rule was met and the minimality certificate holds (`κ ≤ tol_kappa`).
     Converged,
+    /// The stopping rule was met at a point whose certificate does not hold (`κ > tol_kappa`):
+    /// a fixed point of the outer map that is not a KKT point of problem (3).
+    FixedPoint,
     /// `max_outer` steps without meeting the stopping rule.
     MaxOuterIterations,
     /// A sub-problem's QP did not solve (its status is in the record).
@@ -146,6 +172,7 @@ impl RunStatus {
     pub fn as_str(&self) -> &'static str {
         match self {
             RunStatus::Converged => "converged",
+            RunStatus::FixedPoint => "fixed_point",
             RunStatus::MaxOuterIterations => "max_outer_iterations",
             RunStatus::SubproblemFailed => "subproblem_failed",
             RunStatus::LineSearchFailed => "line_search_failed",
@@ -183,6 +210,9 @@ pub struct IterationRecord {
     pub backend_iterations: usize,
     /// Last QP status of this outer step.
     pub qp_status: &'static str,
+    /// The energy scale `E(φ_k)` of the stopping rule ([`energy_scale`]; NaN at iteration
+    /// 0).
+    pub energy_scale: f64,
     /// Seconds in pair search and row building.
     pub t_pairs_s: f64,
     /// Seconds assembling gradients, Hessians and QP matrices.
@@ -216,6 +246,12 @@ pub enum RunError {
     /// The time limit is not > 0.
     #[error("time limit must be > 0 seconds, got {0}")]
     BadTimeLimit(f64),
+    /// The H¹ norm of the mesh (for the stopping rule and the certificate) cannot be built.
+    #[error("{0}")]
+    H1(#[from] H1Error),
+    /// The certificate could not be computed (a bug: the point is admissible).
+    #[error("minimality certificate: {0}")]
+    Certificate(#[from] CertificateError),
 }
 
 /// Final state of a run.
@@ -239,7 +275,9 @@ pub struct RunResult {
     pub last_rows: Vec<PairRows>,
     /// Multipliers of the last sub-problem (`μ ≥ 0`, one per row of each pair).
     pub multipliers: Vec<[f64; 4]>,
-    /// Wall time of the whole loop.
+    /// The minimality certificate at φ (computed once, at the end, whatever the status).
+    pub certificate: Certificate,
+    /// Wall time of the whole loop (the certificate included).
     pub wall_time_s: f64,
 }
 
@@ -250,6 +288,28 @@ pub struct RunResult {
 /// row exactly at ε and the kernel returned ε − 2.3e-17.
 pub fn roundoff_allowance(x: &[f64]) -> f64 {
     16.0 * f64::EPSILON * x.iter().fold(1.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The energy scale `E(x) = S·ℓ` of the stopping rule (docs/method.md, the stopping rule):
+/// `S = max(‖J'(x)‖_{H⁻¹}, max_t ‖J_t'(x)‖_{H⁻¹})`, the largest force of the balance at `x`
+/// (the net force on the free dofs, each term's force with its reactions at the fixed
+/// vertices; [`crate::solve::certificate::forces`]), in the unit-free norm of
+/// [`crate::solve::h1::H1Norm::scaled`], and `ℓ` the diameter of the reference positions: the work of that
+/// force over the size of the scene. It scales with the energy unit, does not depend on the
+/// length unit or on an additive constant in J (which `|J|` does: `−C ln V` shifts with the
+/// unit of area), and does not vanish at a minimum without contact.
+pub fn energy_scale(energy: &dyn Objective, x: &[f64], norms: &H1Norms) -> f64 {
+    let (gnorm, term_force, _, _) = crate::solve::certificate::forces(energy, x, norms);
+    gnorm.max(term_force) * norms.free.ell
+}
+
+/// The distance tolerance of the certificate: a pair is at distance ε when its distance is at
+/// most `ε + 2δ + qp_tol·ℓ`, `δ = margin_rel·ε + margin_abs` the sub-problems' row margin (the
+/// rows are imposed at `ε + δ`) and `qp_tol·ℓ` what a backend's feasibility tolerance leaves
+/// on a row of length scale `ℓ` (the reference diameter).
+pub fn certificate_active_tol(settings: &OuterSettings, eps: f64, ell: f64) -> f64 {
+    let delta = settings.inner.margin_rel * eps + settings.inner.margin_abs;
+    2.0 * delta + settings.qp_tol * ell
 }
 
 /// Median length of the contact edges at `x`: the `h̄` of [`TrustSettings`] and of
@@ -430,6 +490,8 @@ pub fn run_observed(
     if !jx.is_finite() {
         return Err(RunError::BadInitialEnergy(jx));
     }
+    let norms = H1Norms::scaled(mesh)?;
+    let mut e_scale = energy_scale(energy, &x, &norms);
     let hbar = median_edge_length(mesh, x0);
     let roundoff = roundoff_allowance(x0);
     let mut delta = settings.trust.delta0 * hbar;
@@ -450,6 +512,7 @@ pub fn run_observed(
             inner_iterations: 0,
             backend_iterations: 0,
             qp_status: "none",
+            energy_scale: e_scale,
             t_pairs_s: t_pairs0,
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
@@ -466,8 +529,14 @@ pub fn run_observed(
         min_distance: md0,
         last_rows: Vec::new(),
         multipliers: Vec::new(),
+        certificate: Certificate::default(),
         wall_time_s: 0.0,
     };
+    // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
+    // last sub-problem stalled in its line search.
+    let mut stopped_by_rule = false;
+    let mut stalled = false;
+    let mut inner = settings.inner.clone();
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
     let eps_qp = eps + margin;
     // The last sub-problem's multipliers by pair: the next step's warm start.
@@ -505,6 +574,8 @@ pub fn run_observed(
         let trust =
             (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: &x, delta });
         let mut oracle = lazy_oracle(mesh, &x, eps_qp);
+        inner.energy_scale = Some(e_scale);
+        inner.length_scale = settings.qp_in_run_units.then_some(norms.free.ell);
         let sub = solve_subproblem(
             mesh,
             energy,
@@ -516,7 +587,7 @@ pub fn run_observed(
             (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
             Some(&last_mult),
             backend,
-            &settings.inner,
+            &inner,
             deadline,
         )?;
         let box_active = trust.is_some_and(|tb| {
@@ -533,6 +604,7 @@ pub fn run_observed(
         let tc = Instant::now();
         let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
         let t_check = tc.elapsed().as_secs_f64();
+        let e_new = energy_scale(energy, &sub.y, &norms);
         let active_rows = sub
             .rows
             .par_iter()
@@ -562,6 +634,7 @@ pub fn run_observed(
                 inner_iterations: sub.inner_iterations,
                 backend_iterations: sub.backend_iterations,
                 qp_status: sub.qp_status.as_str(),
+                energy_scale: e_new,
                 t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
                 t_assembly_s: sub.t_assembly_s,
                 t_solve_s: sub.t_solve_s,
@@ -584,6 +657,7 @@ pub fn run_observed(
             .max(1e-3 * hbar);
         x = sub.y;
         jx = sub.energy;
+        e_scale = e_new;
         result.energy = jx;
         result.min_distance = md;
         last_mult = sub
@@ -615,11 +689,33 @@ pub fn run_observed(
                 delta = (0.5 * delta).max(t.delta_min * hbar);
             }
         }
-        // With a binding box the step is not argmin over T(ψ): do not stop on it.
-        if !box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
-            result.status = RunStatus::Converged;
+        // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
+        // 64u|J| an energy difference is round-off.
+        let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+        if !box_active && (jprev - jx).abs() <= tol {
+            stopped_by_rule = true;
+            stalled = sub.line_search_stalled;
             break;
         }
+    }
+    // The certificate at the returned point, with the last sub-problem's multipliers (summed
+    // per pair) as the warm start of its active set.
+    let warm: HashMap<ContactPair, f64> = result
+        .last_rows
+        .iter()
+        .zip(&result.multipliers)
+        .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+        .collect();
+    let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+    result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
+    if stopped_by_rule {
+        result.status = if result.certificate.kappa <= settings.tol_kappa {
+            RunStatus::Converged
+        } else if stalled {
+            RunStatus::LineSearchFailed
+        } else {
+            RunStatus::FixedPoint
+        };
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();
