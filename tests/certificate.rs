@@ -9,6 +9,7 @@ use contactlab::energy::{Gravity, Hessian, HessianModel, MembraneEnergy, Objecti
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::mesh::{Body, BodyKind, Mesh};
 use contactlab::scene::rod::{self, RodParams};
+use contactlab::scene::Scene;
 use contactlab::solve::certificate::{certificate, Certificate};
 use contactlab::solve::h1::H1Norms;
 use contactlab::solve::outer::{certificate_active_tol, run, OuterSettings, RunResult, RunStatus};
@@ -29,6 +30,24 @@ fn solve(
     })
     .unwrap();
     (res, energies)
+}
+
+/// The balloons at level `n` from the initial `heights`, run with the default settings.
+fn balloons(n: usize, heights: [f64; 4]) -> (Scene, RunResult) {
+    let scene = build(&BalloonsParams {
+        n,
+        heights,
+        ..Default::default()
+    })
+    .unwrap();
+    let (res, _) = solve(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        &OuterSettings::default(),
+    );
+    (scene, res)
 }
 
 fn curve(name: &str, vertices: Vec<usize>, edges: Vec<usize>) -> Body {
@@ -191,37 +210,14 @@ fn certificate_separates_the_symmetric_minimum_from_the_asymmetric_fixed_point()
     // docs/method.md: from the symmetric start Pantz's iteration ends at a KKT point of (3);
     // from the heights 0.9, 0.2, 0.9, 0.2 it ends at a fixed point above the minimum of the
     // broken state it reaches (Lemma 5.6's ‖R‖ ≈ 0.3–0.5 there).
-    let sym = build(&BalloonsParams {
-        n: 40,
-        ..Default::default()
-    })
-    .unwrap();
-    let (res, _) = solve(
-        &sym.mesh,
-        &sym.energy,
-        sym.eps,
-        &sym.x0,
-        &OuterSettings::default(),
-    );
+    let (_, res) = balloons(40, [0.2; 4]);
     assert_eq!(res.status, RunStatus::Converged);
     assert!(
         res.certificate.kappa <= 1e-7,
         "κ = {:e}",
         res.certificate.kappa
     );
-    let asym = build(&BalloonsParams {
-        n: 40,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
-    let (res, _) = solve(
-        &asym.mesh,
-        &asym.energy,
-        asym.eps,
-        &asym.x0,
-        &OuterSettings::default(),
-    );
+    let (_, res) = balloons(40, [0.9, 0.2, 0.9, 0.2]);
     assert_eq!(res.status, RunStatus::FixedPoint);
     // measured 5.5e-3: the unbalanced force is 0.55 % of the net force, 500 times the
     // default tolerance 1e-5
@@ -289,19 +285,7 @@ fn scaled_mesh(mesh: &Mesh, l: f64) -> Mesh {
 fn certificate_does_not_depend_on_the_units() {
     // The asymmetric fixed point at n = 20 (κ well above round-off), in the original units
     // and with energies × 1e-6 and lengths × 1e-3 (and × 1e3).
-    let scene = build(&BalloonsParams {
-        n: 20,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
-    let (res, _) = solve(
-        &scene.mesh,
-        &scene.energy,
-        scene.eps,
-        &scene.x0,
-        &OuterSettings::default(),
-    );
+    let (scene, res) = balloons(20, [0.9, 0.2, 0.9, 0.2]);
     let tol = certificate_active_tol(&OuterSettings::default(), scene.eps, 1.0);
     let base = cert_at(&scene.mesh, &scene.energy, &res.x, scene.eps, tol);
     assert!(base.kappa > 1e-3, "{base:?}");
@@ -389,18 +373,7 @@ fn stopping_rule_does_not_depend_on_the_units() {
 fn certificate_warm_start_changes_only_the_work() {
     // The active set starts from the last sub-problem's multipliers; from none it reaches
     // the same residual.
-    let scene = build(&BalloonsParams {
-        n: 20,
-        ..Default::default()
-    })
-    .unwrap();
-    let (res, _) = solve(
-        &scene.mesh,
-        &scene.energy,
-        scene.eps,
-        &scene.x0,
-        &OuterSettings::default(),
-    );
+    let (scene, res) = balloons(20, [0.2; 4]);
     let norms = H1Norms::scaled(&scene.mesh).unwrap();
     let tol = certificate_active_tol(&OuterSettings::default(), scene.eps, norms.free.ell);
     let warm: HashMap<ContactPair, f64> = res
@@ -409,26 +382,18 @@ fn certificate_warm_start_changes_only_the_work() {
         .zip(&res.multipliers)
         .map(|(r, m)| (r.pair, m.iter().sum()))
         .collect();
-    let cold = certificate(
-        &scene.mesh,
-        &scene.energy,
-        &res.x,
-        scene.eps,
-        tol,
-        &norms,
-        &HashMap::new(),
-    )
-    .unwrap();
-    let hot = certificate(
-        &scene.mesh,
-        &scene.energy,
-        &res.x,
-        scene.eps,
-        tol,
-        &norms,
-        &warm,
-    )
-    .unwrap();
+    let [cold, hot] = [HashMap::new(), warm].map(|w| {
+        certificate(
+            &scene.mesh,
+            &scene.energy,
+            &res.x,
+            scene.eps,
+            tol,
+            &norms,
+            &w,
+        )
+        .unwrap()
+    });
     assert_eq!(cold.pairs, hot.pairs);
     assert!(cold.pairs > 0);
     assert!(

@@ -401,192 +401,40 @@ pub(crate) fn nnls(
     warm: &[f64],
 ) -> Nnls {
     let m = cols.len();
-    let n = g.len();
-    let solve_col = |b: &[(usize, f64)]| {
-        let mut z = vec![0.0; n];
-        for &(k, v) in b {
-            z[k] += v;
-        }
-        solve(&mut z);
-        z
-    };
-    let mut vg = g.to_vec();
-    solve(&mut vg);
-    let gnorm = dot(g, &vg).max(0.0).sqrt();
-    // c_j = b_jᵀ G⁻¹ g; ‖b_j‖_{G⁻¹} (NaN until needed: one solve each).
-    let c: Vec<f64> = cols.iter().map(|b| sp_dot(b, &vg)).collect();
-    let mut bnorm = vec![f64::NAN; m];
-
-    let mut chol = Chol::default();
-    let mut pset: Vec<usize> = Vec::new();
-    let mut mu: Vec<f64> = Vec::new();
-    let mut in_p = vec![false; m];
-    let mut excluded = vec![false; m];
+    let mut lh = ActiveSet::new(g, cols, solve);
     let mut iterations = 0;
-    // Appends column j to the factor; false when it is dependent (or zero).
-    let append = |j: usize, pset: &[usize], chol: &mut Chol, bnorm: &mut [f64], tol: f64| {
-        let z = solve_col(&cols[j]);
-        let d = sp_dot(&cols[j], &z);
-        bnorm[j] = d.max(0.0).sqrt();
-        let q: Vec<f64> = pset.iter().map(|&k| sp_dot(&cols[k], &z)).collect();
-        d > 0.0 && chol.push(&q, d, tol)
-    };
     // Warm start: the given positive multipliers.
-    for j in 0..m {
-        if warm[j] > 0.0 && append(j, &pset, &mut chol, &mut bnorm, WARM_PIVOT_TOL) {
-            pset.push(j);
-            mu.push(warm[j]);
-            in_p[j] = true;
+    for (j, &w) in warm.iter().enumerate() {
+        if w > 0.0 && lh.add(j, w, WARM_PIVOT_TOL) {
             iterations += 1;
         }
     }
-    // Moves μ towards the least-squares solution on the passive set, dropping the columns
-    // that reach 0, until that solution is positive. `fresh`: the last column was just added
-    // (at μ = 0); if the solution does not make it positive it cannot lower the residual
-    // (round-off), and it is taken out again and excluded.
-    let settle = |pset: &mut Vec<usize>,
-                  mu: &mut Vec<f64>,
-                  chol: &mut Chol,
-                  in_p: &mut [bool],
-                  excluded: &mut [bool],
-                  dirty: &mut bool,
-                  mut fresh: bool| {
-        loop {
-            let cp: Vec<f64> = pset.iter().map(|&k| c[k]).collect();
-            let s = chol.solve(&cp);
-            if fresh && s[s.len() - 1].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-                let j = pset.pop().expect("a column was just added");
-                mu.pop();
-                chol.rows.pop();
-                in_p[j] = false;
-                excluded[j] = true;
-                return;
-            }
-            fresh = false;
-            if s.iter().all(|&v| v > 0.0) {
-                *mu = s;
-                return;
-            }
-            let mut alpha = f64::INFINITY;
-            let mut hit = 0;
-            for (k, (&sk, &mk)) in s.iter().zip(mu.iter()).enumerate() {
-                if sk <= 0.0 {
-                    let a = mk / (mk - sk);
-                    if a < alpha {
-                        alpha = a;
-                        hit = k;
-                    }
-                }
-            }
-            for (mk, sk) in mu.iter_mut().zip(&s) {
-                *mk += alpha * (sk - *mk);
-            }
-            mu[hit] = 0.0;
-            // drop every column at 0, from the end so that the indices stay valid
-            for k in (0..pset.len()).rev() {
-                if mu[k].is_nan() || mu[k] <= 0.0 {
-                    in_p[pset[k]] = false;
-                    pset.remove(k);
-                    mu.remove(k);
-                    chol.remove(k);
-                }
-            }
-            // a removal can make an excluded column independent again
-            excluded.iter_mut().for_each(|e| *e = false);
-            *dirty = true;
-            if pset.is_empty() {
-                return;
-            }
-        }
-    };
-    // Removals update the factor by rotations, which keeps the rounding errors of the columns
-    // removed; `dirty` says the factor has seen one since it was last built afresh.
-    let mut dirty = false;
-    if !pset.is_empty() {
-        settle(
-            &mut pset,
-            &mut mu,
-            &mut chol,
-            &mut in_p,
-            &mut excluded,
-            &mut dirty,
-            false,
-        );
+    if !lh.pset.is_empty() {
+        lh.settle(false);
     }
-    let residual_of = |pset: &[usize], mu: &[f64]| {
-        let mut r = g.to_vec();
-        for (&k, &mk) in pset.iter().zip(mu) {
-            for &(d, v) in &cols[k] {
-                r[d] -= mk * v;
-            }
-        }
-        let mut t = r.clone();
-        solve(&mut t);
-        let rn = dot(&r, &t).max(0.0).sqrt();
-        (t, rn)
-    };
     let cap = 10 * m + 100;
     let unresolved;
     loop {
-        let (t, rn) = residual_of(&pset, &mu);
+        let (t, rn) = lh.residual();
         // w_j = b_jᵀ G⁻¹ r: the decrease of ½‖r‖² per unit of μ_j; cos_j = w_j / ‖b_j‖ is
         // ‖r‖ times the cosine of the angle between r and b_j. The round-off of w_j is about
         // u·‖b_j‖·(‖g‖ + ‖Bμ‖) ≤ u·‖b_j‖·(2‖g‖ + ‖r‖).
-        let floor = 128.0 * f64::EPSILON * (2.0 * gnorm + rn);
-        let w: Vec<f64> = cols.par_iter().map(|b| sp_dot(b, &t)).collect();
-        // ‖b_j‖ only where w_j > 0 (no other column can be a candidate)
-        let need: Vec<usize> = (0..m)
-            .filter(|&j| w[j] > 0.0 && bnorm[j].is_nan())
-            .collect();
-        let norms: Vec<f64> = need
-            .par_iter()
-            .map(|&j| sp_dot(&cols[j], &solve_col(&cols[j])).max(0.0).sqrt())
-            .collect();
-        for (&j, &b) in need.iter().zip(&norms) {
-            bnorm[j] = b;
-        }
-        let cos = |j: usize| {
-            if w[j] > 0.0 && bnorm[j] > 0.0 {
-                w[j] / bnorm[j]
-            } else {
-                0.0
-            }
-        };
+        let floor = 128.0 * f64::EPSILON * (2.0 * lh.gnorm + rn);
+        let cos = lh.cosines(&t);
         let best = (0..m)
-            .filter(|&j| !in_p[j] && !excluded[j])
-            .map(|j| (cos(j), j))
+            .filter(|&j| !lh.in_p[j] && !lh.excluded[j])
+            .map(|j| (cos[j], j))
             .filter(|&(cj, _)| cj > DUAL_TOL * rn + floor)
             .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
         let Some((_, j)) = best else {
-            if dirty {
+            if lh.dirty {
                 // Optimal with a factor updated by removals: build it afresh on the passive
                 // set, solve again from there, and test again.
-                dirty = false;
-                chol = Chol::default();
-                let (old_p, old_mu) = (std::mem::take(&mut pset), std::mem::take(&mut mu));
-                for (&k, &mk) in old_p.iter().zip(&old_mu) {
-                    if append(k, &pset, &mut chol, &mut bnorm, PIVOT_TOL) {
-                        pset.push(k);
-                        mu.push(mk);
-                    } else {
-                        in_p[k] = false;
-                    }
-                }
-                if !pset.is_empty() {
-                    settle(
-                        &mut pset,
-                        &mut mu,
-                        &mut chol,
-                        &mut in_p,
-                        &mut excluded,
-                        &mut dirty,
-                        false,
-                    );
-                }
+                lh.rebuild();
                 continue;
             }
             unresolved = (0..m)
-                .filter(|&j| excluded[j] && cos(j) > 100.0 * DUAL_TOL * rn + floor)
+                .filter(|&j| lh.excluded[j] && cos[j] > 100.0 * DUAL_TOL * rn + floor)
                 .count();
             break;
         };
@@ -595,33 +443,203 @@ pub(crate) fn nnls(
             break;
         }
         iterations += 1;
-        if !append(j, &pset, &mut chol, &mut bnorm, PIVOT_TOL) {
-            excluded[j] = true;
-            continue;
+        if lh.add(j, 0.0, PIVOT_TOL) {
+            lh.settle(true);
+        } else {
+            lh.excluded[j] = true;
         }
-        pset.push(j);
-        mu.push(0.0);
-        in_p[j] = true;
-        settle(
-            &mut pset,
-            &mut mu,
-            &mut chol,
-            &mut in_p,
-            &mut excluded,
-            &mut dirty,
-            true,
-        );
     }
-    let (_, residual) = residual_of(&pset, &mu);
-    let mut full = vec![0.0; m];
-    for (&k, &mk) in pset.iter().zip(&mu) {
-        full[k] = mk;
+    let (_, residual) = lh.residual();
+    let mut mu = vec![0.0; m];
+    for (&k, &mk) in lh.pset.iter().zip(&lh.mu) {
+        mu[k] = mk;
     }
     Nnls {
-        mu: full,
+        mu,
         residual,
         iterations,
         unresolved,
+    }
+}
+
+/// The state of the Lawson–Hanson method: the passive set `pset` with its multipliers `mu`
+/// and the Cholesky factor of `Q` on it.
+struct ActiveSet<'a> {
+    g: &'a [f64],
+    cols: &'a [Vec<(usize, f64)>],
+    solve: &'a (dyn Fn(&mut [f64]) + Sync),
+    /// `‖g‖_{G⁻¹}`.
+    gnorm: f64,
+    /// `c_j = b_jᵀ G⁻¹ g`.
+    c: Vec<f64>,
+    /// `‖b_j‖_{G⁻¹}`, NaN until needed (one solve each).
+    bnorm: Vec<f64>,
+    chol: Chol,
+    pset: Vec<usize>,
+    mu: Vec<f64>,
+    in_p: Vec<bool>,
+    /// Columns found dependent on the passive set (forgotten at the next removal).
+    excluded: Vec<bool>,
+    /// Removals update the factor by rotations, which keeps the rounding errors of the
+    /// columns removed: the factor has seen one since it was last built afresh.
+    dirty: bool,
+}
+
+impl<'a> ActiveSet<'a> {
+    fn new(
+        g: &'a [f64],
+        cols: &'a [Vec<(usize, f64)>],
+        solve: &'a (dyn Fn(&mut [f64]) + Sync),
+    ) -> Self {
+        let m = cols.len();
+        let mut vg = g.to_vec();
+        solve(&mut vg);
+        ActiveSet {
+            g,
+            cols,
+            solve,
+            gnorm: dot(g, &vg).max(0.0).sqrt(),
+            c: cols.iter().map(|b| sp_dot(b, &vg)).collect(),
+            bnorm: vec![f64::NAN; m],
+            chol: Chol::default(),
+            pset: Vec::new(),
+            mu: Vec::new(),
+            in_p: vec![false; m],
+            excluded: vec![false; m],
+            dirty: false,
+        }
+    }
+
+    /// `G⁻¹ b_j`.
+    fn solve_col(&self, j: usize) -> Vec<f64> {
+        let mut z = vec![0.0; self.g.len()];
+        for &(k, v) in &self.cols[j] {
+            z[k] += v;
+        }
+        (self.solve)(&mut z);
+        z
+    }
+
+    /// Adds column j to the passive set at `μ_j = mu0`; false (nothing changed) when it is
+    /// zero or its pivot is below `tol` of its diagonal (dependent).
+    fn add(&mut self, j: usize, mu0: f64, tol: f64) -> bool {
+        let z = self.solve_col(j);
+        let d = sp_dot(&self.cols[j], &z);
+        self.bnorm[j] = d.max(0.0).sqrt();
+        let q: Vec<f64> = self
+            .pset
+            .iter()
+            .map(|&k| sp_dot(&self.cols[k], &z))
+            .collect();
+        if !(d > 0.0 && self.chol.push(&q, d, tol)) {
+            return false;
+        }
+        self.pset.push(j);
+        self.mu.push(mu0);
+        self.in_p[j] = true;
+        true
+    }
+
+    /// Moves μ towards the least-squares solution on the passive set, dropping the columns
+    /// that reach 0, until that solution is positive. `fresh`: the last column was just added
+    /// (at μ = 0); if the solution does not make it positive it cannot lower the residual
+    /// (round-off), and it is taken out again and excluded.
+    fn settle(&mut self, mut fresh: bool) {
+        loop {
+            let cp: Vec<f64> = self.pset.iter().map(|&k| self.c[k]).collect();
+            let s = self.chol.solve(&cp);
+            if fresh && s[s.len() - 1].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                let j = self.pset.pop().expect("a column was just added");
+                self.mu.pop();
+                self.chol.rows.pop();
+                self.in_p[j] = false;
+                self.excluded[j] = true;
+                return;
+            }
+            fresh = false;
+            if s.iter().all(|&v| v > 0.0) {
+                self.mu = s;
+                return;
+            }
+            let mut alpha = f64::INFINITY;
+            let mut hit = 0;
+            for (k, (&sk, &mk)) in s.iter().zip(&self.mu).enumerate() {
+                if sk <= 0.0 {
+                    let a = mk / (mk - sk);
+                    if a < alpha {
+                        alpha = a;
+                        hit = k;
+                    }
+                }
+            }
+            for (mk, sk) in self.mu.iter_mut().zip(&s) {
+                *mk += alpha * (sk - *mk);
+            }
+            self.mu[hit] = 0.0;
+            // drop every column at 0, from the end so that the indices stay valid
+            for k in (0..self.pset.len()).rev() {
+                if self.mu[k].is_nan() || self.mu[k] <= 0.0 {
+                    self.in_p[self.pset[k]] = false;
+                    self.pset.remove(k);
+                    self.mu.remove(k);
+                    self.chol.remove(k);
+                }
+            }
+            // a removal can make an excluded column independent again
+            self.excluded.iter_mut().for_each(|e| *e = false);
+            self.dirty = true;
+            if self.pset.is_empty() {
+                return;
+            }
+        }
+    }
+
+    /// Builds the factor afresh on the passive set (columns now dependent leave it), and
+    /// settles from the current multipliers.
+    fn rebuild(&mut self) {
+        self.dirty = false;
+        self.chol = Chol::default();
+        let (old_p, old_mu) = (std::mem::take(&mut self.pset), std::mem::take(&mut self.mu));
+        for (&k, &mk) in old_p.iter().zip(&old_mu) {
+            self.in_p[k] = false;
+            self.add(k, mk, PIVOT_TOL);
+        }
+        if !self.pset.is_empty() {
+            self.settle(false);
+        }
+    }
+
+    /// `(G⁻¹ r, ‖r‖_{G⁻¹})`, `r = g − Σ μ_k b_k`.
+    fn residual(&self) -> (Vec<f64>, f64) {
+        let mut r = self.g.to_vec();
+        for (&k, &mk) in self.pset.iter().zip(&self.mu) {
+            for &(d, v) in &self.cols[k] {
+                r[d] -= mk * v;
+            }
+        }
+        let mut t = r.clone();
+        (self.solve)(&mut t);
+        let rn = dot(&r, &t).max(0.0).sqrt();
+        (t, rn)
+    }
+
+    /// `w_j / ‖b_j‖` where `w_j = b_jᵀ t > 0`, else 0 (the norms computed where needed).
+    fn cosines(&mut self, t: &[f64]) -> Vec<f64> {
+        let w: Vec<f64> = self.cols.par_iter().map(|b| sp_dot(b, t)).collect();
+        let need: Vec<usize> = (0..w.len())
+            .filter(|&j| w[j] > 0.0 && self.bnorm[j].is_nan())
+            .collect();
+        let norms: Vec<f64> = need
+            .par_iter()
+            .map(|&j| sp_dot(&self.cols[j], &self.solve_col(j)).max(0.0).sqrt())
+            .collect();
+        for (&j, &b) in need.iter().zip(&norms) {
+            self.bnorm[j] = b;
+        }
+        w.iter()
+            .zip(&self.bnorm)
+            .map(|(&wj, &bj)| if wj > 0.0 && bj > 0.0 { wj / bj } else { 0.0 })
+            .collect()
     }
 }
 
@@ -806,6 +824,22 @@ mod tests {
         }
     }
 
+    /// Two curves of one edge each, `[0, 1]` and `[2, 3]`, in dimension `dim`.
+    fn two_edges(dim: usize, x: &[f64], fixed: Vec<bool>) -> Mesh {
+        Mesh {
+            dim,
+            x_ref: x.to_vec(),
+            fixed,
+            edges: vec![[0, 1], [2, 3]],
+            edge_body: vec![0, 1],
+            bodies: vec![
+                curve("a", vec![0, 1], vec![0]),
+                curve("b", vec![2, 3], vec![1]),
+            ],
+            ..Default::default()
+        }
+    }
+
     /// The distance whose gradient a generator is: the pair's (part 0) or an endpoint's
     /// distance to the other edge (edge–edge parts 1–4).
     fn distance(mesh: &Mesh, x: &[f64], pair: ContactPair, part: u8) -> f64 {
@@ -860,18 +894,7 @@ mod tests {
         // Edge [0, 1] and edge [2, 3] of two curves; vertex 3 projects inside edge [0, 1],
         // vertex 2 onto its end 1 (an endpoint gradient), 0 and 1 onto edge [2, 3].
         let x = vec![0.0, 0.0, 1.0, 0.2, 1.3, 0.9, 0.4, 0.5];
-        let mesh = Mesh {
-            dim: 2,
-            x_ref: x.clone(),
-            fixed: vec![false, true, false, false],
-            edges: vec![[0, 1], [2, 3]],
-            edge_body: vec![0, 1],
-            bodies: vec![
-                curve("a", vec![0, 1], vec![0]),
-                curve("b", vec![2, 3], vec![1]),
-            ],
-            ..Default::default()
-        };
+        let mesh = two_edges(2, &x, vec![false, true, false, false]);
         assert_eq!(check_generators(&mesh, &x, false), 4);
     }
 
@@ -921,18 +944,7 @@ mod tests {
             0.0, 0.0, 0.0, 1.0, 0.0, 0.0, //
             0.4, 0.1, 0.0, 1.6, 0.1, 0.0,
         ];
-        let mesh = Mesh {
-            dim: 3,
-            x_ref: x.clone(),
-            fixed: vec![false; 4],
-            edges: vec![[0, 1], [2, 3]],
-            edge_body: vec![0, 1],
-            bodies: vec![
-                curve("a", vec![0, 1], vec![0]),
-                curve("b", vec![2, 3], vec![1]),
-            ],
-            ..Default::default()
-        };
+        let mesh = two_edges(3, &x, vec![false; 4]);
         let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
         let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &col).unwrap();
         assert_eq!(pairs, 1);
