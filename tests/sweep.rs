@@ -96,11 +96,35 @@ fn sweep_rows_statuses_and_errors() {
                 get(row, "error")
             );
         } else {
-            assert_eq!(status, "converged", "{k}: {}", get(row, "error"));
+            // Clarabel (both presets) and every `default` run end certified. OSQP and Uzawa at
+            // `low` (QP tolerances 1e-4 and 1e-6) stop on the stopping rule at points whose
+            // certificate may not hold: measured at n = 12, κ = 0.14 (OSQP, J 1.5e-2 above
+            // Clarabel's) and 0.19 (Uzawa, J 4.3e-4 above); OSQP at n = 20 had κ = 0.125
+            // before the QPs' duplicate rows were merged. Such a run must say `fixed_point`, which the
+            // κ check below holds it to.
+            if k.contains("|low|") && !k.contains("|clarabel|") {
+                assert!(
+                    status == "converged" || status == "fixed_point",
+                    "{k}: {status} {}",
+                    get(row, "error")
+                );
+            } else {
+                assert_eq!(status, "converged", "{k}: {}", get(row, "error"));
+            }
+            let kappa: f64 = get(row, "kappa").parse().unwrap();
+            let tol_kappa = get(row, "tol_j").parse::<f64>().unwrap().sqrt();
+            assert_eq!(
+                kappa <= tol_kappa,
+                status == "converged",
+                "{k}: κ = {kappa}"
+            );
             let pos: f64 = get(row, "position_error_h1").parse().unwrap();
             let ee: f64 = get(row, "energy_error").parse().unwrap();
             assert!(pos.is_finite() && pos >= 0.0 && ee >= 0.0, "{k}");
-            assert_eq!(get(row, "max_violation"), "0.0", "{k}");
+            // at most the exact check's round-off allowance, 16u·max(1, max|x_i|), the
+            // coordinates being in [−2, 2] here (docs/method.md, the outer loop)
+            let viol: f64 = get(row, "max_violation").parse().unwrap();
+            assert!((0.0..=32.0 * f64::EPSILON).contains(&viol), "{k}: {viol:e}");
             assert!(get(row, "residual_hm1").parse::<f64>().unwrap() >= 0.0);
         }
     }

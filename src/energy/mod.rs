@@ -353,6 +353,12 @@ pub trait Objective {
     /// Whether every term's Hessian under `model` is positive semi-definite by construction
     /// (every term projected), so that no shift is needed.
     fn model_is_psd(&self, model: HessianModel) -> bool;
+    /// The gradient of each term of `J` (they sum to [`Objective::gradient`]): the forces
+    /// that balance at a stationary point, the scale of the minimality certificate
+    /// (`crate::solve::certificate`). The default is `J` as one term.
+    fn term_gradients(&self, x: &[f64]) -> Vec<Vec<f64>> {
+        vec![self.gradient(x)]
+    }
 }
 
 impl Objective for TotalEnergy {
@@ -367,6 +373,16 @@ impl Objective for TotalEnergy {
     }
     fn model_is_psd(&self, model: HessianModel) -> bool {
         self.terms.iter().all(|t| model.projects(t.as_ref()))
+    }
+    fn term_gradients(&self, x: &[f64]) -> Vec<Vec<f64>> {
+        self.terms
+            .iter()
+            .map(|t| {
+                let mut g = vec![0.0; x.len()];
+                t.add_gradient(x, &mut g);
+                g
+            })
+            .collect()
     }
 }
 

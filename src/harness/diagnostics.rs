@@ -6,7 +6,8 @@
 //! shared by two bodies (a membrane glued to its support) counts for both.
 
 use crate::contact::{near_pairs, pair_rows, rows_for, ContactPair, PairRows};
-use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::mesh::Mesh;
+use crate::solve::h1::h1_gram;
 
 /// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact), among
 /// `pairs` (e.g. [`near_pairs`] within `1.01 ε`).
@@ -189,7 +190,8 @@ fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
     (col, k)
 }
 
-/// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (the fixed dofs
+/// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (on the scene's
+/// own reference positions) (the fixed dofs
 /// are equal in any two configurations of one scene). The position error of the speed/accuracy
 /// trade-off.
 pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
@@ -209,84 +211,6 @@ pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
         .sum::<f64>()
         .max(0.0)
         .sqrt()
-}
-
-/// The H¹ Gram matrix `G = M + K` of P1 functions on the reference mesh (curves: their edges;
-/// 2D solids and 3D surfaces: their triangles, with tangential gradients on surfaces; 3D solids:
-/// their tetrahedra), one copy per coordinate, restricted to the free dofs (upper triangle,
-/// CSC).
-pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
-    let (col, nfree) = free_cols(mesh);
-    let d = mesh.dim;
-    let mut trip: Vec<(usize, usize, f64)> = Vec::new();
-    let mut add = |vs: &[usize], m: &dyn Fn(usize, usize) -> f64| {
-        for (i, &vi) in vs.iter().enumerate() {
-            for (j, &vj) in vs.iter().enumerate() {
-                for c in 0..d {
-                    let (ri, rj) = (col[d * vi + c], col[d * vj + c]);
-                    if ri != usize::MAX && rj != usize::MAX && ri <= rj {
-                        trip.push((ri, rj, m(i, j)));
-                    }
-                }
-            }
-        }
-    };
-    let xr = &mesh.x_ref;
-    let pt = |v: usize| mesh.point(xr, v);
-    for body in &mesh.bodies {
-        match (body.kind, mesh.dim) {
-            (BodyKind::Curve, _) => {
-                for &e in &body.edges {
-                    let [a, b] = mesh.edges[e];
-                    let l = (pt(a) - pt(b)).norm();
-                    add(&[a, b], &|i, j| {
-                        let mass = if i == j { l / 3.0 } else { l / 6.0 };
-                        let stiff = if i == j { 1.0 / l } else { -1.0 / l };
-                        mass + stiff
-                    });
-                }
-            }
-            // triangles: 2D solids, 3D surfaces (tangential gradients)
-            (BodyKind::Solid, 2) | (BodyKind::Surface, _) => {
-                for &t in &body.triangles {
-                    let vs = mesh.triangles[t];
-                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
-                    let nrm = (p[1] - p[0]).cross(&(p[2] - p[0]));
-                    let area = 0.5 * nrm.norm();
-                    // ∇φ_i = n̂ × e_i / (2·area), e_i the edge opposite vertex i (cyclic):
-                    // ∇φ_i·∇φ_j = e_i·e_j / (4·area²).
-                    let e: Vec<_> = (0..3).map(|i| p[(i + 2) % 3] - p[(i + 1) % 3]).collect();
-                    add(&vs, &|i, j| {
-                        let mass = if i == j { area / 6.0 } else { area / 12.0 };
-                        mass + e[i].dot(&e[j]) / (4.0 * area)
-                    });
-                }
-            }
-            (BodyKind::Solid, _) => {
-                for &t in &body.tets {
-                    let vs = mesh.tets[t];
-                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
-                    let m =
-                        nalgebra::Matrix3::from_columns(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]);
-                    let vol = m.determinant() / 6.0;
-                    let Some(minv) = m.try_inverse() else {
-                        continue;
-                    };
-                    // ∇φ_1..3 are the rows of M⁻¹, ∇φ_0 = −Σ.
-                    let mut grads = [nalgebra::Vector3::zeros(); 4];
-                    for k in 0..3 {
-                        grads[k + 1] = minv.row(k).transpose();
-                    }
-                    grads[0] = -(grads[1] + grads[2] + grads[3]);
-                    add(&vs, &|i, j| {
-                        let mass = if i == j { vol / 10.0 } else { vol / 20.0 };
-                        mass + vol * grads[i].dot(&grads[j])
-                    });
-                }
-            }
-        }
-    }
-    CscMatrix::from_triplets(nfree, nfree, &trip).expect("indices in range, values finite")
 }
 
 /// The gradient of row `i` of a pair, `n·(φ(p) − φ(q))`, as `(dof, value)` entries on the free

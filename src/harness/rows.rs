@@ -181,6 +181,9 @@ pub struct StaticRow {
     /// Canonical stationarity relative to the gradient.
     #[serde(serialize_with = "opt_float")]
     pub stationarity_rel: Option<f64>,
+    /// The minimality certificate κ at the returned state (every finished run).
+    #[serde(serialize_with = "opt_float")]
+    pub kappa: Option<f64>,
     /// Pairs of the last iterate.
     pub pairs: Option<usize>,
     /// Active rows (of the diagnostics, else of the last iterate).
@@ -242,6 +245,7 @@ impl StaticRow {
             t_assembly_s: Some(sum(|x| x.t_assembly_s)),
             t_solve_s: Some(sum(|x| x.t_solve_s)),
             t_diagnostics_s: Some(o.t_diagnostics_s),
+            kappa: Some(r.certificate.kappa),
             ..Default::default()
         };
         if let Some((d, _)) = &o.diagnostics {
@@ -559,7 +563,7 @@ mod tests {
         let stat = "dim,h,eps,qp_tol,tol_j,max_inner,status,outer_iterations,inner_iterations,\
                     backend_iterations,final_energy,min_distance,all_admissible,energy_monotone,\
                     residual_hm1,bound,ratio,lambda_norm_h,c_phi,max_edges_per_vertex,\
-                    stationarity_rel,pairs,active_rows,wall_time_s,t_pairs_s,t_assembly_s,\
+                    stationarity_rel,kappa,pairs,active_rows,wall_time_s,t_pairs_s,t_assembly_s,\
                     t_solve_s,t_diagnostics_s,energy_error,position_error_h1,max_violation,\
                     reference_energy,error";
         let dynamic = "dim,h,eps,dt,steps,scheme,qp_tol,tol_j,status,steps_taken,\
@@ -623,7 +627,7 @@ mod tests {
             "{line}"
         );
         assert!(
-            line.ends_with(",true,,,,,,,,,,,,,,,,,,,,\"bad \"\"x\"\"\"\n"),
+            line.ends_with(",true,,,,,,,,,,,,,,,,,,,,,\"bad \"\"x\"\"\"\n"),
             "{line}"
         );
         assert_eq!(f(f64::NAN), "");

@@ -18,6 +18,7 @@ use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
+use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
@@ -169,8 +170,11 @@ fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
 
 #[derive(serde::Serialize)]
 struct Summary {
-    /// Lemma 5.4 / 5.6 diagnostics (converged runs only).
+    /// Lemma 5.4 / 5.6 diagnostics (runs stopped by the stopping rule: `converged`,
+    /// `fixed_point`).
     diagnostics: Option<DiagSummary>,
+    /// The minimality certificate at the returned state (every run).
+    certificate: Certificate,
     scene: String,
     dim: usize,
     n: usize,
@@ -509,7 +513,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         shapes_and_energy_svg(&shapes, &energies, &title)
     };
     write_svg(&out.join("shapes.svg"), &svg)?;
-    let diagnostics = if res.status == RunStatus::Converged {
+    let diagnostics = if matches!(res.status, RunStatus::Converged | RunStatus::FixedPoint) {
         let (diag, tol) = case::lemma_diagnostics(&scene, &res)?;
         let mut w = csv::Writer::from_writer(Vec::new());
         for p in &diag.pairs {
@@ -521,6 +525,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         None
     };
     let summary = Summary {
+        certificate: res.certificate.clone(),
         diagnostics: diagnostics
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),
@@ -555,11 +560,12 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{}: status {} after {} outer iterations, J = {:.12e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        "{}: status {} after {} outer iterations, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
         res.energy,
+        res.certificate.kappa,
         state,
         res.min_distance.distance / scene.eps,
         res.wall_time_s,

@@ -98,8 +98,10 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         n: a.n,
         ..Default::default()
     })?;
-    let mut backend = backend_from_name(&a.backend, &default_settings(&a.backend))?;
+    let qps = default_settings(&a.backend);
+    let mut backend = backend_from_name(&a.backend, &qps)?;
     let mut settings = OuterSettings {
+        qp_tol: qps.eps_abs,
         max_outer: a.max_outer,
         pruning,
         ..Default::default()

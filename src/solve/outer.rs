@@ -1,5 +1,9 @@
 //! The outer loop of §3: `φ_{k+1} = argmin { J(φ) : φ ∈ T(φ_k) }`, stopped when
-//! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (docs/method.md).
+//! `|J(φ_{k+1}) − J(φ_k)| ≤ max(tol_J · E(φ_{k+1}), 64 u |J(φ_{k+1})|)` (docs/method.md, the
+//! stopping rule), with the energy scale of [`energy_scale`]. Where the rule stops the run,
+//! the minimality certificate ([`crate::solve::certificate`]) decides the status: `converged`
+//! when `κ ≤ tol_κ`, else `fixed_point` (or `line_search_failed` when the last sub-problem
+//! stalled in its line search). Every run ends with its certificate.
 //!
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
@@ -12,6 +16,8 @@ use crate::contact::{
 };
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
+use crate::solve::certificate::{certificate, Certificate, CertificateError};
+use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{
@@ -86,8 +92,22 @@ impl Default for TrustSettings {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OuterSettings {
-    /// Relative energy tolerance of the stopping rule.
+    /// Relative energy tolerance of the stopping rule (relative to the energy scale of
+    /// [`energy_scale`]).
     pub tol_j: f64,
+    /// Tolerance of the minimality certificate: a run that meets the stopping rule is
+    /// `converged` when `κ ≤ tol_kappa`, else `fixed_point`. The presets use `√tol_J`
+    /// (docs/method.md).
+    pub tol_kappa: f64,
+    /// The backend's tolerance (`eps_abs`): with the row margin δ it sets the certificate's
+    /// distance tolerance ([`certificate_active_tol`]).
+    pub qp_tol: f64,
+    /// Hand the sub-problems' QPs to the backend in the run's own units (energy scale, reference
+    /// diameter; [`crate::solve::qp_units`]), so that the backends' absolute tolerances do not
+    /// depend on the scene's units. Off by default: it changes the QPs every backend sees, and
+    /// with QPs solved to a relative accuracy the creeping runs creep longer
+    /// (docs/known-gaps.md).
+    pub qp_in_run_units: bool,
     /// Maximum number of outer steps.
     pub max_outer: usize,
     /// Which pairs the sub-problems carry.
@@ -116,6 +136,9 @@ impl Default for OuterSettings {
     fn default() -> Self {
         OuterSettings {
             tol_j: 1e-10,
+            tol_kappa: 1e-5,
+            qp_tol: 1e-9,
+            qp_in_run_units: false,
             max_outer: 2000,
             pruning: Pruning::Lazy,
             lazy_start: 0.25,
@@ -131,8 +154,11 @@ impl Default for OuterSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunStatus {
-    /// The stopping rule was met.
+    /// The stopping rule was met and the minimality certificate holds (`κ ≤ tol_kappa`).
     Converged,
+    /// The stopping rule was met at a point whose certificate does not hold (`κ > tol_kappa`):
+    /// a fixed point of the outer map that is not a KKT point of problem (3).
+    FixedPoint,
     /// `max_outer` steps without meeting the stopping rule.
     MaxOuterIterations,
     /// A sub-problem's QP did not solve (its status is in the record).
@@ -152,6 +178,7 @@ impl RunStatus {
     pub fn as_str(&self) -> &'static str {
         match self {
             RunStatus::Converged => "converged",
+            RunStatus::FixedPoint => "fixed_point",
             RunStatus::MaxOuterIterations => "max_outer_iterations",
             RunStatus::SubproblemFailed => "subproblem_failed",
             RunStatus::LineSearchFailed => "line_search_failed",
@@ -189,6 +216,9 @@ pub struct IterationRecord {
     pub backend_iterations: usize,
     /// Last QP status of this outer step.
     pub qp_status: &'static str,
+    /// The energy scale `E(φ_k)` of the stopping rule ([`energy_scale`]; NaN at iteration
+    /// 0).
+    pub energy_scale: f64,
     /// Seconds in pair search and row building.
     pub t_pairs_s: f64,
     /// Seconds assembling gradients, Hessians and QP matrices.
@@ -222,6 +252,12 @@ pub enum RunError {
     /// The time limit is not > 0.
     #[error("time limit must be > 0 seconds, got {0}")]
     BadTimeLimit(f64),
+    /// The H¹ norm of the mesh (for the stopping rule and the certificate) cannot be built.
+    #[error("{0}")]
+    H1(#[from] H1Error),
+    /// The certificate could not be computed (a bug: the point is admissible).
+    #[error("minimality certificate: {0}")]
+    Certificate(#[from] CertificateError),
 }
 
 /// Final state of a run.
@@ -245,7 +281,9 @@ pub struct RunResult {
     pub last_rows: Vec<PairRows>,
     /// Multipliers of the last sub-problem (`μ ≥ 0`, one per row of each pair).
     pub multipliers: Vec<[f64; 4]>,
-    /// Wall time of the whole loop.
+    /// The minimality certificate at φ (computed once, at the end, whatever the status).
+    pub certificate: Certificate,
+    /// Wall time of the whole loop (the certificate included).
     pub wall_time_s: f64,
     /// The final polish at ε ([`OuterSettings::polish`]), when it ran.
     pub polish: Option<Polish>,
@@ -271,6 +309,28 @@ pub struct Polish {
 /// row exactly at ε and the kernel returned ε − 2.3e-17.
 pub fn roundoff_allowance(x: &[f64]) -> f64 {
     16.0 * f64::EPSILON * x.iter().fold(1.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The energy scale `E(x) = S·ℓ` of the stopping rule (docs/method.md, the stopping rule):
+/// `S = max(‖J'(x)‖_{H⁻¹}, max_t ‖J_t'(x)‖_{H⁻¹})`, the largest force of the balance at `x`
+/// (the net force on the free dofs, each term's force with its reactions at the fixed
+/// vertices; [`crate::solve::certificate::forces`]), in the unit-free norm of
+/// [`crate::solve::h1::H1Norm::scaled`], and `ℓ` the diameter of the reference positions: the work of that
+/// force over the size of the scene. It scales with the energy unit, does not depend on the
+/// length unit or on an additive constant in J (which `|J|` does: `−C ln V` shifts with the
+/// unit of area), and does not vanish at a minimum without contact.
+pub fn energy_scale(energy: &dyn Objective, x: &[f64], norms: &H1Norms) -> f64 {
+    let (gnorm, term_force, _, _) = crate::solve::certificate::forces(energy, x, norms);
+    gnorm.max(term_force) * norms.free.ell
+}
+
+/// The distance tolerance of the certificate: a pair is at distance ε when its distance is at
+/// most `ε + 2δ + qp_tol·ℓ`, `δ = margin_rel·ε + margin_abs` the sub-problems' row margin (the
+/// rows are imposed at `ε + δ`) and `qp_tol·ℓ` what a backend's feasibility tolerance leaves
+/// on a row of length scale `ℓ` (the reference diameter).
+pub fn certificate_active_tol(settings: &OuterSettings, eps: f64, ell: f64) -> f64 {
+    let delta = settings.inner.margin_rel * eps + settings.inner.margin_abs;
+    2.0 * delta + settings.qp_tol * ell
 }
 
 /// Median length of the contact edges at `x`: the `h̄` of [`TrustSettings`] and of
@@ -372,6 +432,8 @@ struct StepContext<'a> {
     hbar: f64,
     roundoff: f64,
     deadline: Option<Instant>,
+    /// The H¹ norms of the stopping rule's energy scale.
+    norms: &'a H1Norms,
 }
 
 /// One outer step: its sub-problem, its record, the exact minimum distance of its iterate, and
@@ -381,6 +443,8 @@ struct Step {
     record: IterationRecord,
     min_distance: MinDistance,
     box_active: bool,
+    /// The energy scale at the step's iterate ([`energy_scale`]).
+    energy_scale: f64,
 }
 
 impl StepContext<'_> {
@@ -397,6 +461,7 @@ impl StepContext<'_> {
         margin: f64,
         delta: f64,
         d_prev: f64,
+        e_scale: f64,
         warm: &HashMap<ContactPair, [f64; 4]>,
         backend: &mut dyn QpBackend,
     ) -> Result<Step, RunError> {
@@ -436,6 +501,8 @@ impl StepContext<'_> {
             inner.margin_rel = 0.0;
             inner.margin_abs = 0.0;
         }
+        inner.energy_scale = Some(e_scale);
+        inner.length_scale = settings.qp_in_run_units.then_some(self.norms.free.ell);
         let sub = solve_subproblem(
             mesh,
             self.energy,
@@ -461,6 +528,7 @@ impl StepContext<'_> {
         let tc = Instant::now();
         let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
         let t_check = tc.elapsed().as_secs_f64();
+        let e_new = energy_scale(self.energy, &sub.y, self.norms);
         // Active: within twice the run's margin of ε (the same count with or without it).
         let act = 2.0 * (settings.inner.margin_rel * eps + settings.inner.margin_abs);
         let active_rows = sub
@@ -491,6 +559,7 @@ impl StepContext<'_> {
             inner_iterations: sub.inner_iterations,
             backend_iterations: sub.backend_iterations,
             qp_status: sub.qp_status.as_str(),
+            energy_scale: e_new,
             t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
             t_assembly_s: sub.t_assembly_s,
             t_solve_s: sub.t_solve_s,
@@ -500,6 +569,7 @@ impl StepContext<'_> {
             record,
             min_distance: md,
             box_active,
+            energy_scale: e_new,
         })
     }
 }
@@ -600,6 +670,8 @@ pub fn run_observed(
     if !jx.is_finite() {
         return Err(RunError::BadInitialEnergy(jx));
     }
+    let norms = H1Norms::scaled(mesh)?;
+    let mut e_scale = energy_scale(energy, &x, &norms);
     let hbar = median_edge_length(mesh, x0);
     let roundoff = roundoff_allowance(x0);
     let mut delta = settings.trust.delta0 * hbar;
@@ -620,6 +692,7 @@ pub fn run_observed(
             inner_iterations: 0,
             backend_iterations: 0,
             qp_status: "none",
+            energy_scale: e_scale,
             t_pairs_s: t_pairs0,
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
@@ -636,10 +709,15 @@ pub fn run_observed(
         min_distance: md0,
         last_rows: Vec::new(),
         multipliers: Vec::new(),
+        certificate: Certificate::default(),
         wall_time_s: 0.0,
         polish: None,
         psi: Vec::new(),
     };
+    // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
+    // last sub-problem stalled in its line search.
+    let mut stopped_by_rule = false;
+    let mut stalled = false;
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
     // The last sub-problem's multipliers by pair: the next step's warm start.
     let mut last_mult: HashMap<ContactPair, [f64; 4]> = HashMap::new();
@@ -653,6 +731,7 @@ pub fn run_observed(
         hbar,
         roundoff,
         deadline,
+        norms: &norms,
     };
     // The ψ of the last accepted step.
     let mut psi = x.clone();
@@ -661,7 +740,9 @@ pub fn run_observed(
             result.status = RunStatus::TimeLimit;
             break;
         }
-        let step = ctx.step(&x, &x, k, margin, delta, d_prev, &last_mult, backend)?;
+        let step = ctx.step(
+            &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
+        )?;
         let sub = step.sub;
         result.outer_iterations = k;
         result.inner_iterations += sub.inner_iterations;
@@ -686,6 +767,7 @@ pub fn run_observed(
             .max(1e-3 * hbar);
         psi = std::mem::replace(&mut x, sub.y);
         jx = sub.energy;
+        e_scale = step.energy_scale;
         result.energy = jx;
         result.min_distance = step.min_distance;
         last_mult = sub
@@ -717,19 +799,24 @@ pub fn run_observed(
                 delta = (0.5 * delta).max(t.delta_min * hbar);
             }
         }
-        // With a binding box the step is not argmin over T(ψ): do not stop on it.
-        if !step.box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
-            result.status = RunStatus::Converged;
+        // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
+        // 64u|J| an energy difference is round-off.
+        let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+        if !step.box_active && (jprev - jx).abs() <= tol {
+            stopped_by_rule = true;
+            stalled = sub.line_search_stalled;
             break;
         }
     }
-    // The polish (docs/method.md, "The row margin"): the last sub-problem, min J over T(ψ) of
-    // the last ψ, solved again from the converged state with its rows at ε itself, so that the
-    // reported state and energy carry no bias from the margin δ. Kept only if admissible,
-    // solved, and not above J.
-    if settings.polish && result.status == RunStatus::Converged {
+    // The polish (docs/method.md, "The row margin"): where the stopping rule stopped the run,
+    // the last sub-problem, min J over T(ψ) of the last ψ, is solved again from the final
+    // state with its rows at ε itself, so that the reported state and energy carry no bias
+    // from the margin δ. Kept only if admissible, solved, and not above J.
+    if settings.polish && stopped_by_rule {
         let k = result.outer_iterations;
-        let step = ctx.step(&psi, &x, k, 0.0, delta, d_prev, &last_mult, backend)?;
+        let step = ctx.step(
+            &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+        )?;
         let sub = step.sub;
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
@@ -752,6 +839,25 @@ pub fn run_observed(
         }
     }
     result.psi = psi;
+    // The certificate at the returned point, with the last sub-problem's multipliers (summed
+    // per pair) as the warm start of its active set.
+    let warm: HashMap<ContactPair, f64> = result
+        .last_rows
+        .iter()
+        .zip(&result.multipliers)
+        .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+        .collect();
+    let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+    result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
+    if stopped_by_rule {
+        result.status = if result.certificate.kappa <= settings.tol_kappa {
+            RunStatus::Converged
+        } else if stalled {
+            RunStatus::LineSearchFailed
+        } else {
+            RunStatus::FixedPoint
+        };
+    }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();
     observer.finish(&result);
