@@ -54,7 +54,7 @@
 //! Assembly is rayon-parallel, and its results are bit-for-bit independent of the number of
 //! rayon threads:
 //!
-//! * sums (energy values, the gas shoelace area) are split into fixed chunks of [`CHUNK`]
+//! * sums (energy values, the gas shoelace area) are split into fixed chunks of `CHUNK`
 //!   elements, independent of the thread count; one partial sum is computed per chunk and the
 //!   partials are added sequentially in chunk order;
 //! * gradients: per-element contributions are computed in parallel (independently of each
