@@ -307,7 +307,7 @@ pub enum HessianModel {
     Projected,
     /// Element terms projected, global-measure terms ([`Energy::exact_in_model`]) exact; the
     /// sub-problem makes the model positive definite with an adaptive shift `σI` checked by
-    /// an inertia test (`crate::solve::subproblem`). The default.
+    /// an inertia test (docs/method.md, "The Newton model"). The default.
     #[default]
     Shifted,
 }
