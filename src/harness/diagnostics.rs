@@ -174,19 +174,11 @@ pub enum DiagnosticsError {
     Qp(#[from] QpError),
 }
 
-/// Free dof numbering: `col[dof]`, `usize::MAX` for a fixed dof.
+/// Free dof numbering: `col[dof]`, `usize::MAX` for a prescribed dof (a fixed vertex or a
+/// supported component), the numbering of the sub-problem's QP.
 fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
-    let mut col = vec![usize::MAX; mesh.x_ref.len()];
-    let mut k = 0;
-    for v in 0..mesh.nv() {
-        if !mesh.fixed[v] {
-            for c in 0..mesh.dim {
-                col[mesh.dim * v + c] = k;
-                k += 1;
-            }
-        }
-    }
-    (col, k)
+    let d = crate::solve::subproblem::DofMap::new(mesh);
+    (d.col, d.nfree)
 }
 
 /// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (the fixed dofs

@@ -12,8 +12,8 @@ use super::topology::chain;
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
 use crate::energy::{
-    Energy, Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy, NeoHookean2d,
-    NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
+    Energy, Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy, PressureEnergy,
+    String3dEnergy, TotalEnergy,
 };
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
@@ -72,12 +72,13 @@ impl Ctx<'_> {
         } = header;
         let nb = loaded.len();
         let (global, welded) = self.resolve_welds(&welds, &loaded)?;
-        let (x_ref, fixed, x0) = place_vertices(dim, &loaded, &global);
+        let (x_ref, fixed, mut x0) = place_vertices(dim, &loaded, &global);
         let parts = body_parts(&loaded, &global);
         let mut mesh = assemble_mesh(dim, x_ref, fixed, &parts, &file_order(nb));
         let body_elements: Vec<Vec<[usize; 4]>> = parts.into_iter().map(|p| p.elements).collect();
+        let displaced = self.apply_supports(&mut mesh, &mut x0, &loaded, &specs, &global)?;
         let (h, body_all_fixed) = mesh_size(&mesh);
-        let energy = self.energy_terms(
+        let mut energy = self.energy_terms(
             &mesh,
             &x0,
             &loaded,
@@ -86,6 +87,10 @@ impl Ctx<'_> {
             &body_all_fixed,
             gravity.as_ref(),
         )?;
+        let dead_load = self.dead_loads(&mesh, &loaded, &specs, &global, &body_elements)?;
+        if let Some(load) = &dead_load {
+            energy.terms.push(Box::new(load.clone()));
+        }
 
         // contact filter
         let names: Vec<String> = loaded.iter().map(|l| l.name.clone()).collect();
@@ -100,7 +105,15 @@ impl Ctx<'_> {
         if let Some(g) = &gravity {
             self.check_bounded(&mesh, g, &specs, &allowed, &welded, &names)?;
         }
+        if let Some(load) = &dead_load {
+            self.check_dead_loads_bounded(
+                &mesh, &loaded, &specs, &global, load, &allowed, &welded,
+            )?;
+        }
         self.check_rest_shapes(&mesh, eps, eps_line, &allowed, &names)?;
+        if displaced {
+            self.check_displaced_start(&mesh, &x0, eps, &loaded, &global, &names)?;
+        }
         self.check_start(&mesh, &x0, eps, &energy, &names)?;
         let v0 = self.initial_velocities(&mesh, &loaded, &specs, &names)?;
         Ok(SceneFile {
@@ -119,6 +132,7 @@ impl Ctx<'_> {
             densities: specs.iter().map(|s| s.density).collect(),
             v0,
             gravity: gravity.map(|(g, _)| g),
+            dead_load,
             body_lines: loaded.iter().map(|l| l.line).collect(),
         })
     }
@@ -176,7 +190,8 @@ impl Ctx<'_> {
     }
 
     /// A body's elastic term from its `material`: string (curves), St Venant–Kirchhoff
-    /// membrane (3D surfaces), neo-Hookean (solids).
+    /// membrane (3D surfaces); solids in [`Ctx::solid_material`] (neo-Hookean or linear
+    /// elastic).
     fn material_term(
         &self,
         dim: usize,
@@ -185,16 +200,31 @@ impl Ctx<'_> {
         els: &[[usize; 4]],
         x_ref: &[f64],
     ) -> Result<Box<dyn Energy>, SceneFileError> {
+        if l.kind == BodyKind::Solid {
+            return self.solid_material(dim, l, m, els, x_ref);
+        }
         let key = &l.key;
         let line = l.line;
         let mk = format!("{key}.material");
+        if let Some((k, v)) = [("E", m.young), ("nu", m.nu)]
+            .into_iter()
+            .find_map(|(k, v)| v.map(|v| (k, v.to_string())))
+            .or(m.plane.as_ref().map(|p| ("plane", format!("{p:?}"))))
+        {
+            return Err(self.invalid(
+                line,
+                format!("{mk}.{k}"),
+                v,
+                "E, nu and plane are keys of solids' materials",
+            ));
+        }
         let expect = match (l.kind, dim) {
             (BodyKind::Curve, _) => "string",
             (BodyKind::Surface, _) => "stvk-membrane",
-            (BodyKind::Solid, _) => "neo-hookean",
+            (BodyKind::Solid, _) => unreachable!("solids return through solid_material above"),
         };
         if m.model != expect {
-            return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean for solids)", l.kind).to_lowercase()));
+            return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean or linear-elastic for solids)", l.kind).to_lowercase()));
         }
         let mu =
             m.mu.ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
@@ -230,12 +260,7 @@ impl Ctx<'_> {
             (BodyKind::Curve, 2) => Box::new(MembraneEnergy::new(edges, x_ref, mu)),
             (BodyKind::Curve, _) => Box::new(String3dEnergy::new(edges, x_ref, mu)),
             (BodyKind::Surface, _) => Box::new(Membrane3dEnergy::new(tris, x_ref, mu, lambda)),
-            (BodyKind::Solid, 2) => Box::new(NeoHookean2d::new(tris, x_ref, mu, lambda)),
-            (BodyKind::Solid, _) => Box::new(
-                NeoHookean3d::new(els.to_vec(), x_ref, mu, lambda).map_err(|e| {
-                    self.invalid(line, key.clone(), format!("{:?}", l.name), e.to_string())
-                })?,
-            ),
+            (BodyKind::Solid, _) => unreachable!("solids return through solid_material above"),
         })
     }
 
@@ -392,27 +417,15 @@ impl Ctx<'_> {
             .iter()
             .map(|s| s.density.unwrap_or(0.0) > 0.0)
             .collect();
-        let mut supported: Vec<bool> = mesh
-            .bodies
-            .iter()
-            .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
-            .collect();
-        loop {
-            let mut changed = false;
-            for i in 0..nb {
-                if !supported[i]
-                    && (0..nb).any(|j| {
-                        j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j])
-                    })
-                {
-                    supported[i] = true;
-                    changed = true;
-                }
-            }
-            if !changed {
-                break;
-            }
-        }
+        let supported = supported_closure(
+            nb,
+            mesh.bodies
+                .iter()
+                .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
+                .collect(),
+            allowed,
+            welded,
+        );
         for i in 0..nb {
             if !supported[i] && has_load[i] {
                 return Err(self.invalid(
@@ -549,6 +562,31 @@ impl Ctx<'_> {
             }
         }
         Ok(v0)
+    }
+}
+
+/// The bodies supported directly (`supported`) or through a body they may touch (`allowed`,
+/// the `nb × nb` contact mask) or are welded to (`welded`), transitively.
+pub(super) fn supported_closure(
+    nb: usize,
+    mut supported: Vec<bool>,
+    allowed: &[bool],
+    welded: &[bool],
+) -> Vec<bool> {
+    loop {
+        let mut changed = false;
+        for i in 0..nb {
+            if !supported[i]
+                && (0..nb)
+                    .any(|j| j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j]))
+            {
+                supported[i] = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            return supported;
+        }
     }
 }
 

@@ -78,7 +78,9 @@
 mod assemble;
 mod body;
 mod contact;
+mod loads;
 mod schema;
+mod solid;
 pub(crate) mod topology;
 mod validate;
 mod welds;
@@ -165,6 +167,24 @@ pub enum SceneFileError {
         /// ε.
         eps: f64,
     },
+    /// The prescribed displacements of `[[body.support]]` bring two allowed disjoint elements
+    /// of the start closer than ε.
+    #[error(
+        "{path}: the prescribed displacements ([[body.support]]) make the initial configuration \
+         inadmissible: {pair} are at distance {distance:.6e} < eps = {eps:.6e} (the start puts \
+         every supported component at its prescribed value: prescribe a smaller displacement, \
+         or move the bodies apart)"
+    )]
+    DisplacedStart {
+        /// The scene file.
+        path: String,
+        /// The closest pair, with its bodies and local indices.
+        pair: String,
+        /// Its distance.
+        distance: f64,
+        /// ε.
+        eps: f64,
+    },
 }
 
 /// A loaded scene file: the scene and the file's solver settings.
@@ -186,6 +206,9 @@ pub struct SceneFile {
     pub v0: Vec<f64>,
     /// `gravity`, if non-zero.
     pub gravity: Option<Vec<f64>>,
+    /// The dead loads of `[[body.traction]]` and `[[body.force]]` (also a term of the
+    /// scene's energy), if any.
+    pub dead_load: Option<crate::energy::DeadLoad>,
     /// Line of each `[[body]]` table.
     body_lines: Vec<usize>,
 }
