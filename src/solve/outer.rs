@@ -344,6 +344,10 @@ pub struct OuterEvent<'a> {
     pub record: &'a IterationRecord,
     /// The step's iterate (the sub-problem's solution, admissible or not).
     pub x: &'a [f64],
+    /// The rows of the step's last QP (empty at iteration 0).
+    pub rows: &'a [PairRows],
+    /// Their multipliers (`μ ≥ 0`, one per row of each pair; empty at iteration 0).
+    pub multipliers: &'a [[f64; 4]],
 }
 
 impl Loop for OuterLoop {
@@ -455,6 +459,8 @@ pub fn run_observed(
             t_solve_s: 0.0,
         },
         x: &x,
+        rows: &[],
+        multipliers: &[],
     });
     let mut result = RunResult {
         x: Vec::new(),
@@ -567,6 +573,8 @@ pub fn run_observed(
                 t_solve_s: sub.t_solve_s,
             },
             x: &sub.y,
+            rows: &sub.rows,
+            multipliers: &sub.multipliers,
         });
         if md.distance < eps - roundoff {
             result.status = RunStatus::Inadmissible;
