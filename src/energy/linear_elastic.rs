@@ -185,42 +185,11 @@ mod tests {
         (x, t, interior)
     }
 
-    /// The 2×2×2 cube grid of side 0.5 split into 48 tets, jittered.
+    /// The 2×2×2 cube grid of side 0.5 split into 48 tets (the neo-Hookean tests' grid),
+    /// jittered.
     fn grid3(rng: &mut ChaCha8Rng) -> (Vec<f64>, Vec<[usize; 4]>) {
-        let m = 3;
-        let mut x = Vec::new();
-        for k in 0..m {
-            for j in 0..m {
-                for i in 0..m {
-                    for c in [i, j, k] {
-                        x.push(c as f64 * 0.5 + rng.gen_range(-0.04..0.04));
-                    }
-                }
-            }
-        }
-        let step = [1, m, m * m];
-        let perms = [
-            [0, 1, 2],
-            [0, 2, 1],
-            [1, 0, 2],
-            [1, 2, 0],
-            [2, 0, 1],
-            [2, 1, 0],
-        ];
-        let mut tets = Vec::new();
-        for k in 0..m - 1 {
-            for j in 0..m - 1 {
-                for i in 0..m - 1 {
-                    let v0 = i + m * j + m * m * k;
-                    for pm in &perms {
-                        let v1 = v0 + step[pm[0]];
-                        let v2 = v1 + step[pm[1]];
-                        tets.push([v0, v1, v2, v2 + step[pm[2]]]);
-                    }
-                }
-            }
-        }
-        (x, tets)
+        let (x, tets) = crate::energy::neo_hookean::tests_3d::cube_grid(2, 0.5);
+        (perturb(rng, &x, 0.04), tets)
     }
 
     fn perturb(rng: &mut ChaCha8Rng, x: &[f64], a: f64) -> Vec<f64> {

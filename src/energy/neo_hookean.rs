@@ -378,7 +378,7 @@ mod tests_2d {
                     elements: vec![nh.elements[e]],
                     dm_inv: vec![nh.dm_inv[e]],
                     measure: vec![nh.measure[e]],
-                    law: nh.law.clone(),
+                    law: nh.law,
                 };
                 one.elements[0] = [0, 1, 2];
                 let mut xe = vec![0.0; 6];
@@ -478,7 +478,7 @@ mod tests_2d {
 }
 
 #[cfg(test)]
-mod tests_3d {
+pub(crate) mod tests_3d {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
     use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
@@ -488,7 +488,7 @@ mod tests_3d {
     /// The `n×n×n` grid of unit cubes of side `h`, each split into 6 tetrahedra around its
     /// diagonal (Kuhn split; half of them listed with negative orientation), vertices
     /// `v = i + (n+1) j + (n+1)² k`. Returns `(x_ref, tets)`.
-    fn cube_grid(n: usize, h: f64) -> (Vec<f64>, Vec<[usize; 4]>) {
+    pub(crate) fn cube_grid(n: usize, h: f64) -> (Vec<f64>, Vec<[usize; 4]>) {
         let m = n + 1;
         let mut x = Vec::with_capacity(3 * m * m * m);
         for k in 0..m {
@@ -666,7 +666,7 @@ mod tests_3d {
                     elements: vec![[0, 1, 2, 3]],
                     dm_inv: vec![nh.dm_inv[e]],
                     measure: vec![nh.measure[e]],
-                    law: nh.law.clone(),
+                    law: nh.law,
                 };
                 let mut xe = vec![0.0; 12];
                 for (a, &v) in nh.elements[e].iter().enumerate() {

@@ -16,8 +16,8 @@
 //! iterate (its difference from the multipliers' force is the stationarity residual).
 //!
 //! **Normal force and pressure.** A frictionless contact force is normal to the contact: the
-//! normal force is `|f|`, with a minus sign on a solid's vertex when `f` points outward (`f·n
-//! > 0`, a pull; `n` the outward unit normal of its boundary at `v`, the normalized sum of its
+//! normal force is `|f|`, with a minus sign on a solid's vertex when `f` points outward (a
+//! pull, `f·n` positive; `n` the outward unit normal of its boundary at `v`, the normalized sum of its
 //! contact edges' outward normals weighted by length in 2D, of its contact faces' by area in
 //! 3D). The pressure is the normal force over the vertex's tributary measure **projected
 //! normal to `f`**: `Σ_e |e|/k · |n̂_e·f̂|` over its contact edges (2D, `k = 2`) or faces (3D,
@@ -27,6 +27,16 @@
 //! interface, where a side edge meets the contact face at 90°) it leaves out the side that does
 //! not face the force. `pressure_nominal` uses the reference lengths and normals (the nominal
 //! pressure, what a small-strain theory such as Hertz's compares with).
+//!
+//! **Two-sided pressure** (`pressure_two_sided`, `pressure_nominal_two_sided`): between two
+//! deformable bodies the rows of both sides keep the two boundaries ε apart at every vertex of
+//! either (the over-constraint of two-pass node-to-segment contact), and with non-matching
+//! vertices each side's nodal forces oscillate, in opposite phase. The two-sided pressure of
+//! `v` is the mean of its own pressure and the other side's pressure interpolated at the
+//! closest point of its nearest element (barycentric weights of that pair); against a fixed
+//! obstacle (every vertex of the element fixed) it is `v`'s own. It smooths, it does not
+//! conserve each body's total force exactly; measured in results/README.md (Hertz, elastic
+//! flat). Cost: a lookup per vertex in the pairs the gap search finds anyway.
 //!
 //! **The multipliers' pressure** (`pressure_pairs`): the pairs in which `v` is the point
 //! (2D vertex–edge, 3D vertex–triangle) carry the force `Σ_i μ_i` along their normal; their sum
@@ -77,6 +87,11 @@ pub struct VertexContact {
     pub pressure: f64,
     /// `normal_force / tributary_ref`.
     pub pressure_nominal: f64,
+    /// The mean of `pressure` and the other side's, interpolated at the closest point of the
+    /// nearest element `v` may touch (`pressure` when that element's vertices are all fixed).
+    pub pressure_two_sided: f64,
+    /// The same with the nominal pressures.
+    pub pressure_nominal_two_sided: f64,
     /// The multipliers' nodal pressure: `Σ_{pairs with point v} Σ_i μ_i / tributary`.
     pub pressure_pairs: f64,
     /// Distance to the nearest element it may touch (NaN beyond the search radius).
@@ -97,6 +112,8 @@ pub struct ContactState {
     pub reaction: Vec<f64>,
     /// Pressure per vertex (0 off the contact vertices).
     pub pressure: Vec<f64>,
+    /// The two-sided pressure per vertex.
+    pub pressure_two_sided: Vec<f64>,
     /// The multipliers' nodal pressure per vertex.
     pub pressure_pairs: Vec<f64>,
     /// Distance − ε per vertex (NaN beyond the search radius or off the contact vertices).
@@ -175,15 +192,23 @@ pub fn contact_state(
     let trib_ref = projected_tributary(mesh, &mesh.x_ref, &dir);
     // distances of the points of the pairs within ε + h̄/4
     let mut dist = vec![f64::NAN; nv];
+    // the nearest element of each point: its vertices and the closest point's weights
+    let mut nearest: Vec<Option<([usize; 3], [f64; 3])>> = vec![None; nv];
     let hbar = median_edge_length(mesh, x);
     for p in near_pairs(mesh, x, eps + 0.25 * hbar, false) {
-        let v = match p {
-            ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
+        let (v, verts) = match p {
+            ContactPair::PointEdge { x, a } => {
+                let e = mesh.edges[a];
+                (x, [e[0], e[1], usize::MAX])
+            }
+            ContactPair::PointTriangle { x, t } => (x, mesh.faces[t]),
             ContactPair::EdgeEdge { .. } => continue,
         };
-        let d = pair_rows(mesh, x, p).map_or(0.0, |r| r.distance);
-        if !(dist[v] <= d) {
+        let r = pair_rows(mesh, x, p);
+        let d = r.map_or(0.0, |r| r.distance);
+        if dist[v].is_nan() || d < dist[v] {
             dist[v] = d;
+            nearest[v] = r.map(|r| (verts, [r.weight[0], r.weight[1], r.weight[2]]));
         }
     }
     let body_of = first_body(mesh);
@@ -191,9 +216,10 @@ pub fn contact_state(
     // leaves duals of order its tolerance on inactive rows)
     let fm_max = force_mult.iter().fold(0.0f64, |m, f| m.max(f.abs()));
     let mut pressure = vec![0.0; nv];
+    let mut pressure_nominal = vec![0.0; nv];
     let mut pressure_pairs = vec![0.0; nv];
+    let mut normal_force = vec![0.0; nv];
     let mut gap = vec![f64::NAN; nv];
-    let mut near = Vec::new();
     for &v in &contact {
         let f: [f64; 3] = std::array::from_fn(|c| if c < dim { force[dim * v + c] } else { 0.0 });
         let n = normal[v];
@@ -204,13 +230,35 @@ pub fn contact_state(
             fabs
         };
         let per = |m: f64| if m > 0.0 { fnorm / m } else { 0.0 };
+        normal_force[v] = fnorm;
         pressure[v] = per(trib[v]);
+        pressure_nominal[v] = per(trib_ref[v]);
         pressure_pairs[v] = if trib[v] > 0.0 {
             pair_force[v] / trib[v]
         } else {
             0.0
         };
         gap[v] = dist[v] - eps;
+    }
+    // two-sided: the mean of v's pressure and the other side's, interpolated at the closest
+    // point of v's nearest element (its own pressure when that element is an obstacle's, every
+    // vertex fixed)
+    let two_sided = |p: &[f64], v: usize| match nearest[v] {
+        Some((verts, w)) if !verts.iter().all(|&u| u == usize::MAX || mesh.fixed[u]) => {
+            let other: f64 = verts
+                .iter()
+                .zip(w)
+                .filter(|(&u, _)| u != usize::MAX)
+                .map(|(&u, w)| w * p[u])
+                .sum();
+            0.5 * (p[v] + other)
+        }
+        _ => p[v],
+    };
+    let pressure_two_sided: Vec<f64> = (0..nv).map(|v| two_sided(&pressure, v)).collect();
+    let mut near = Vec::new();
+    for &v in &contact {
+        let f: [f64; 3] = std::array::from_fn(|c| if c < dim { force[dim * v + c] } else { 0.0 });
         let has_mult = (0..dim).any(|c| force_mult[dim * v + c].abs() > 1e-6 * fm_max);
         if dist[v].is_finite() || has_mult {
             near.push(VertexContact {
@@ -218,12 +266,14 @@ pub fn contact_state(
                 body: body_of[v],
                 position: std::array::from_fn(|c| if c < dim { x[dim * v + c] } else { 0.0 }),
                 force: f,
-                normal: n,
-                normal_force: fnorm,
+                normal: normal[v],
+                normal_force: normal_force[v],
                 tributary: trib[v],
                 tributary_ref: trib_ref[v],
                 pressure: pressure[v],
-                pressure_nominal: per(trib_ref[v]),
+                pressure_nominal: pressure_nominal[v],
+                pressure_two_sided: pressure_two_sided[v],
+                pressure_nominal_two_sided: two_sided(&pressure_nominal, v),
                 pressure_pairs: pressure_pairs[v],
                 distance: dist[v],
             });
@@ -235,6 +285,7 @@ pub fn contact_state(
         force_mult,
         reaction,
         pressure,
+        pressure_two_sided,
         pressure_pairs,
         gap,
         near,
@@ -493,7 +544,8 @@ pub const STRESS_NAMES: [&str; 7] = [
 ];
 
 /// The data arrays of a static frame at `x`: point data `displacement`, `contact_force`,
-/// `reaction` (vectors), `contact_pressure`, `contact_pressure_pairs`, `gap` (scalars); cell
+/// `reaction` (vectors), `contact_pressure`, `contact_pressure_two_sided`,
+/// `contact_pressure_pairs`, `gap` (scalars); cell
 /// data the Cauchy stress components and von Mises of the solid elements.
 pub fn frame_fields(
     mesh: &Mesh,
@@ -514,6 +566,7 @@ pub fn frame_fields(
     let mut f = OwnedVtuFields {
         point_scalars: vec![
             ("contact_pressure".into(), st.pressure),
+            ("contact_pressure_two_sided".into(), st.pressure_two_sided),
             ("contact_pressure_pairs".into(), st.pressure_pairs),
             ("gap".into(), st.gap),
         ],
@@ -547,6 +600,12 @@ pub struct ContactRow {
     pub y: f64,
     /// Position (0 in 2D).
     pub z: f64,
+    /// Reference position (what small-strain theory, Hertz's, compares with).
+    pub x_ref: f64,
+    /// Reference position.
+    pub y_ref: f64,
+    /// Reference position (0 in 2D).
+    pub z_ref: f64,
     /// Contact force (equilibrium-based).
     pub fx: f64,
     /// Contact force.
@@ -561,6 +620,10 @@ pub struct ContactRow {
     pub pressure: f64,
     /// Pressure per reference tributary.
     pub pressure_nominal: f64,
+    /// Two-sided pressure.
+    pub pressure_two_sided: f64,
+    /// Two-sided nominal pressure.
+    pub pressure_nominal_two_sided: f64,
     /// The multipliers' nodal pressure.
     pub pressure_pairs: f64,
     /// Distance to the nearest element (empty beyond the search radius).
@@ -583,6 +646,13 @@ pub fn contact_rows(mesh: &Mesh, st: &ContactState, eps: f64, step: usize) -> Ve
             x: c.position[0],
             y: c.position[1],
             z: c.position[2],
+            x_ref: mesh.x_ref[mesh.dim * c.vertex],
+            y_ref: mesh.x_ref[mesh.dim * c.vertex + 1],
+            z_ref: if mesh.dim == 3 {
+                mesh.x_ref[3 * c.vertex + 2]
+            } else {
+                0.0
+            },
             fx: c.force[0],
             fy: c.force[1],
             fz: c.force[2],
@@ -590,6 +660,8 @@ pub fn contact_rows(mesh: &Mesh, st: &ContactState, eps: f64, step: usize) -> Ve
             tributary: c.tributary,
             pressure: c.pressure,
             pressure_nominal: c.pressure_nominal,
+            pressure_two_sided: c.pressure_two_sided,
+            pressure_nominal_two_sided: c.pressure_nominal_two_sided,
             pressure_pairs: c.pressure_pairs,
             distance: c.distance.is_finite().then_some(c.distance),
             gap: c.distance.is_finite().then_some(c.distance - eps),
@@ -645,13 +717,16 @@ impl Writer<OuterLoop> for StaticContacts<'_> {
 }
 
 /// The header of `contacts.csv` (the fields of [`ContactRow`]).
-pub const CONTACT_HEADER: [&str; 16] = [
+pub const CONTACT_HEADER: [&str; 21] = [
     "step",
     "vertex",
     "body",
     "x",
     "y",
     "z",
+    "x_ref",
+    "y_ref",
+    "z_ref",
     "fx",
     "fy",
     "fz",
@@ -659,6 +734,8 @@ pub const CONTACT_HEADER: [&str; 16] = [
     "tributary",
     "pressure",
     "pressure_nominal",
+    "pressure_two_sided",
+    "pressure_nominal_two_sided",
     "pressure_pairs",
     "distance",
     "gap",

@@ -97,6 +97,7 @@ impl Quantity {
         (v.is_finite() && (v > 0.0 || !positive)).then_some(v)
     }
 
+    #[cfg(test)]
     fn eval(&self, idx: &BTreeMap<&str, usize>, row: &[String]) -> Option<f64> {
         self.eval_any(idx, row, true)
     }

@@ -691,26 +691,21 @@ mod tests {
         assert_eq!(vtu_array(&text, "kind").unwrap().len(), 6);
         assert!(vtu_array(&text, "nothing").is_none());
         // wrong lengths are named errors
-        let bad = VtuFields {
+        let short_vectors = VtuFields {
             point_vectors: vec![("displacement", &disp[..9])],
             ..Default::default()
         };
-        let e = vtu_string_with(2, &x, &edges, &tris, &[], &bad).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("'displacement' has 9 values, expected 12"),
-            "{e}"
-        );
-        let bad = VtuFields {
+        let short_cells = VtuFields {
             cell_scalars: vec![("s", &cells[..5])],
             ..Default::default()
         };
-        let e = vtu_string_with(2, &x, &edges, &tris, &[], &bad).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("cell data 's' has 5 values, expected 6"),
-            "{e}"
-        );
+        for (bad, msg) in [
+            (short_vectors, "'displacement' has 9 values, expected 12"),
+            (short_cells, "cell data 's' has 5 values, expected 6"),
+        ] {
+            let e = vtu_string_with(2, &x, &edges, &tris, &[], &bad).unwrap_err();
+            assert!(e.to_string().contains(msg), "{e}");
+        }
         // without the new arrays the document is the one write_vtu always wrote
         assert_eq!(
             vtu_string_with(2, &x, &edges, &tris, &[], &VtuFields::default()).unwrap(),

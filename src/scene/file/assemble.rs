@@ -226,13 +226,8 @@ impl Ctx<'_> {
         if m.model != expect {
             return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean or linear-elastic for solids)", l.kind).to_lowercase()));
         }
-        let mu =
-            m.mu.ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
-        if !(mu > 0.0 && mu.is_finite()) {
-            return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
-        }
-        let lambda = match (expect, m.lambda) {
-            ("string", Some(v)) => {
+        let (mu, lambda) = if expect == "string" {
+            if let Some(v) = m.lambda {
                 return Err(self.invalid(
                     line,
                     format!("{mk}.lambda"),
@@ -240,20 +235,17 @@ impl Ctx<'_> {
                     "the string model has no lambda",
                 ));
             }
-            ("string", None) => 0.0,
-            (_, None) => {
-                return Err(self.invalid(line, format!("{mk}.lambda"), "(missing)", "required"));
+            let mu = m
+                .mu
+                .ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
+            if !(mu > 0.0 && mu.is_finite()) {
+                return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
             }
-            (_, Some(v)) => v,
+            (mu, 0.0)
+        } else {
+            let c = self.elastic_constants(line, &mk, m)?;
+            (c.mu, c.lambda)
         };
-        if !(lambda >= 0.0 && lambda.is_finite()) {
-            return Err(self.invalid(
-                line,
-                format!("{mk}.lambda"),
-                lambda,
-                "must be finite and ≥ 0",
-            ));
-        }
         let edges: Vec<[usize; 2]> = els.iter().map(|e| [e[0], e[1]]).collect();
         let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
         Ok(match (l.kind, dim) {

@@ -78,32 +78,14 @@ impl Ctx<'_> {
             set.insert(v as usize);
         }
         if let Some(bx) = sel.bbox {
-            if bx.min.len() != dim
-                || bx.max.len() != dim
-                || bx.min.iter().chain(&bx.max).any(|c| c.is_nan())
-            {
-                return Err(self.invalid(
-                    line,
-                    format!("{key}.box"),
-                    format!("min = {:?}, max = {:?}", bx.min, bx.max),
-                    format!("min and max must be {dim} numbers each"),
-                ));
-            }
-            let mut hit = 0;
-            for (v, p) in l.x_ref.iter().enumerate() {
-                if (0..dim).all(|c| bx.min[c] <= p[c] && p[c] <= bx.max[c]) {
-                    set.insert(v);
-                    hit += 1;
-                }
-            }
-            if hit == 0 {
-                return Err(self.invalid(
-                    line,
-                    format!("{key}.box"),
-                    format!("min = {:?}, max = {:?}", bx.min, bx.max),
-                    "selects no vertex of the body's reference configuration",
-                ));
-            }
+            set.extend(self.box_select(
+                line,
+                &format!("{key}.box"),
+                bx,
+                &l.x_ref,
+                dim,
+                "reference",
+            )?);
         }
         if set.is_empty() {
             return Err(self.invalid(
@@ -340,6 +322,7 @@ impl Ctx<'_> {
     /// through other bodies, or through welds). A body is supported when it has a fixed vertex
     /// or, for every component of its net load that is not zero, a vertex supported in that
     /// component. A necessary condition only, like the gravity check.
+    #[allow(clippy::too_many_arguments)] // the assembled scene, its bodies and the contact mask
     pub(super) fn check_dead_loads_bounded(
         &self,
         mesh: &Mesh,
@@ -363,8 +346,8 @@ impl Ctx<'_> {
             }
         }
         for (&v, &bi) in &owner {
-            for c in 0..dim {
-                net[bi][c] += load.force[dim * v + c];
+            for (c, n) in net[bi].iter_mut().enumerate() {
+                *n += load.force[dim * v + c];
             }
         }
         let scale = load.force.iter().fold(0.0f64, |m, f| m.max(f.abs()));

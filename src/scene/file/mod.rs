@@ -40,6 +40,19 @@
 //! fixed = { vertices = [0, 10], all = false, box = { min = [-1, -1], max = [1, -0.9] } }
 //! gas = { c = 50.0 }          # optional: −C ln V (closed or chord-closed curve, closed surface)
 //! pressure = { p = 1.0 }      # optional (2D curves): p·A
+//!
+//! [[body]]                    # a solid (docs/materials.md)
+//! kind = "solid"
+//! material = { model = "linear-elastic", E = 1.0, nu = 0.3, plane = "strain" }  # or neo-hookean
+//! [[body.support]]            # prescribed components of a vertex set (vertices, all, box)
+//! box = { min = [-0.01, -9.0], max = [0.01, 9.0] }
+//! components = [0]            # default: all; displacement = [..] (default 0)
+//! [[body.traction]]           # dead traction = [..] or pressure = p on the boundary edges/faces
+//! box = { min = [-9.0, 0.99], max = [9.0, 9.0] }
+//! pressure = 0.01
+//! [[body.force]]              # a point force on each selected vertex
+//! vertices = [3]
+//! value = [0.0, -1e-3]
 //! ```
 //!
 //! **Validation.** Every rule returns a [`SceneFileError`] naming the file and the line, key and
@@ -73,7 +86,9 @@
 //! The module is split by concern: `schema` holds the TOML structs (serde), `validate` the
 //! scene-level keys, `body` the loading and checking of each body's mesh, `welds` the shared
 //! vertices, `contact` the `[contact]` filter, `assemble` the mesh, energy terms and the
-//! checks of the assembled scene, `topology` boundaries and chains of element lists.
+//! checks of the assembled scene, `solid` the solids' materials, `loads` the supports and dead
+//! loads (and the checks of a displaced start), `topology` boundaries and chains of element
+//! lists.
 
 mod assemble;
 mod body;

@@ -77,8 +77,9 @@ impl Ctx<'_> {
     }
 
     /// `mu` and `lambda`, or `E` and `nu` (not both pairs): `μ > 0`, `λ ≥ 0` (so `ν ≥ 0`:
-    /// with `λ < 0` the neo-Hookean `W` is unbounded below as `det F → 0`).
-    fn elastic_constants(
+    /// with `λ < 0` the neo-Hookean `W` is unbounded below as `det F → 0`). Also the
+    /// constants of a 3D surface's membrane (`E` and `nu` are refused before, on non-solids).
+    pub(super) fn elastic_constants(
         &self,
         line: usize,
         mk: &str,
