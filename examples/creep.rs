@@ -93,6 +93,7 @@ fn main() {
                 &scene.mesh,
                 &scene.energy,
                 &res.x,
+                &res.psi,
                 scene.eps,
                 scene.h,
                 &res.last_rows,

@@ -10,12 +10,13 @@ use contactlab::scene::sheets::{self, SheetsParams};
 use contactlab::scene::solids::{self, SolidsParams};
 use contactlab::scene::Scene;
 use contactlab::solve::outer::{run, OuterSettings, Pruning, RunStatus, TrustSettings};
-use contactlab::solve::settings::Accuracy;
+use contactlab::solve::settings::{tol_kappa, Accuracy};
 use contactlab_solvers::backend_from_name;
 use std::process::Command;
 
 struct Trace {
     status: RunStatus,
+    kappa: f64,
     iterates: usize,
     energy: f64,
     min_distance: f64,
@@ -54,6 +55,8 @@ fn checked_run_with(
     let pruning = settings.pruning;
     let settings = OuterSettings {
         tol_j: accuracy.tol_j(),
+        tol_kappa: tol_kappa(accuracy.tol_j()),
+        qp_tol: accuracy.qp_tol(backend),
         ..settings
     };
     let mut b = backend_from_name(backend, &accuracy.qp_settings(backend)).unwrap();
@@ -91,6 +94,7 @@ fn checked_run_with(
     .unwrap();
     Trace {
         status: res.status,
+        kappa: res.certificate.kappa,
         iterates,
         energy: res.energy,
         min_distance: res.min_distance.distance,
@@ -105,11 +109,38 @@ fn scenes() -> Vec<Scene> {
     ]
 }
 
+/// The three scenes stop on the stopping rule at fixed points of Pantz's iteration whose
+/// certificate does not hold (measured at the default preset, lazy rows: κ = 3.5e-3 rod,
+/// 2.8e-3 sheets, 9.1e-2 solids; the trust region: 3.6e-3, 2.8e-3, 9.6e-2): the outer
+/// iteration creeps there (docs/known-gaps.md). They were reported `converged` before the
+/// certificate.
+fn assert_fixed_point(t: &Trace, name: &str) {
+    assert_eq!(t.status, RunStatus::FixedPoint, "{name}");
+    assert!(t.kappa >= 1e-3, "{name}: κ = {:e}", t.kappa);
+}
+
 #[test]
 fn every_3d_iterate_is_admissible_and_j_never_increases_lazy() {
     for scene in scenes() {
         let t = checked_run(&scene, "clarabel", Accuracy::Default, Pruning::Lazy, 200);
-        assert_eq!(t.status, RunStatus::Converged, "{}", scene.name);
+        if scene.name == "sheets" {
+            // The sheets creep under the outer map of §3 (J falling by about 1/k per step;
+            // docs/known-gaps.md): whether the stopping rule fires within 200 steps depends on
+            // how exactly each QP is solved. What is checked here, every iterate admissible
+            // and J never increasing, holds along the whole run whichever way it ends; where
+            // it stops it is not a minimum.
+            assert!(
+                matches!(
+                    t.status,
+                    RunStatus::FixedPoint | RunStatus::MaxOuterIterations
+                ),
+                "sheets: {:?}",
+                t.status
+            );
+            assert!(t.kappa >= 1e-3, "sheets: κ = {:e}", t.kappa);
+        } else {
+            assert_fixed_point(&t, &scene.name);
+        }
         assert!(t.iterates >= 2, "{}: {} iterates", scene.name, t.iterates);
         // the bodies end in contact: some pair at ε
         assert!(
@@ -137,7 +168,7 @@ fn trust_region_3d_iterates_pass_the_all_pairs_check() {
     // δ0 = h̄/10: the default δ0 = h̄ reaches 2√3·h̄ in 3D, nearly every pair of these small
     // meshes (the solids' first step: 61 209 pairs, 21 s of Clarabel). Where the runs stop is
     // measured in docs/measurements.md, not asserted here: the trust region ends the solids at a J
-    // 2.5e-3 above the lazy rows' (both "converged").
+    // 2.5e-3 above the lazy rows' (both fixed points whose certificate does not hold).
     for scene in scenes() {
         let t = checked_run_with(
             &scene,
@@ -153,7 +184,7 @@ fn trust_region_3d_iterates_pass_the_all_pairs_check() {
                 ..Default::default()
             },
         );
-        assert_eq!(t.status, RunStatus::Converged, "{}", scene.name);
+        assert_fixed_point(&t, &scene.name);
         assert!(t.iterates >= 3, "{}: {} iterates", scene.name, t.iterates);
     }
 }
@@ -161,19 +192,27 @@ fn trust_region_3d_iterates_pass_the_all_pairs_check() {
 #[test]
 fn backends_agree_on_the_3d_final_energies() {
     // Measured (docs/measurements.md, results/backends.csv): the rod and the solids agree to relative
-    // 1e-6 at the default preset; the sheets and balloons3d do not (see there).
+    // 1e-6 at the default preset; the sheets and balloons3d do not (see there). All three
+    // backends stop at the same fixed point above the minimum, and agree on its certificate
+    // (measured κ: rod 3.512e-3, 3.512e-3, 3.511e-3; solids 9.128e-2, 9.127e-2, 9.127e-2).
     for scene in [
         rod::build(&RodParams::default()).unwrap(),
         solids::build(&SolidsParams::default()).unwrap(),
     ] {
+        let mut kappas = Vec::new();
         let e: Vec<(&str, f64)> = ["clarabel", "osqp", "uzawa"]
             .into_iter()
             .map(|b| {
                 let t = checked_run(&scene, b, Accuracy::Default, Pruning::Lazy, 200);
-                assert_eq!(t.status, RunStatus::Converged, "{} {b}", scene.name);
+                assert_fixed_point(&t, &format!("{} {b}", scene.name));
+                kappas.push(t.kappa);
                 (b, t.energy)
             })
             .collect();
+        let (klo, khi) = kappas
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &k| (a.min(k), b.max(k)));
+        assert!(khi - klo <= 1e-2 * klo, "{}: κ {kappas:?}", scene.name);
         let lo = e.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
         let hi = e.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
         assert!(
@@ -196,17 +235,23 @@ fn run_directory_of_a_3d_scene() {
             .arg(&out)
             .output()
             .unwrap();
-        assert!(
-            o.status.success(),
+        // both stop at a fixed point whose certificate does not hold: exit code 1, the run
+        // directory written
+        assert_eq!(
+            o.status.code(),
+            Some(1),
             "{scene}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
+        assert!(String::from_utf8_lossy(&o.stderr).contains("fixed_point"));
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
                 .unwrap();
         assert_eq!(summary["dim"], 3, "{scene}");
         assert_eq!(summary["scene"], scene);
-        assert_eq!(summary["status"], "converged");
+        assert_eq!(summary["status"], "fixed_point");
+        let kappa = summary["certificate"]["kappa"].as_f64().unwrap();
+        assert!(kappa >= 1e-3, "{scene}: κ = {kappa}");
         assert_eq!(summary["all_iterates_admissible"], true);
         assert_eq!(summary["energy_monotone"], true);
         assert!(

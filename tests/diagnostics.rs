@@ -3,9 +3,10 @@
 //! non-negative and complementary, and the Lemma 5.6 bound holds at the fixed point.
 
 use contactlab::harness::diagnostics::{
-    converged_diagnostics, h1_gram, stationarity_residual, DiagnosticSettings,
+    converged_diagnostics, stationarity_residual, DiagnosticSettings,
 };
 use contactlab::scene::balloons::{build, BalloonsParams};
+use contactlab::solve::h1::h1_gram;
 use contactlab::solve::outer::{run, OuterSettings, RunStatus};
 use contactlab_solvers::{backend_from_name, default_settings, QpSettings};
 
@@ -37,6 +38,7 @@ fn diagnose(n: usize, backend: &str) -> contactlab::harness::diagnostics::Conver
         &scene.mesh,
         &scene.energy,
         &res.x,
+        &res.psi,
         scene.eps,
         scene.h,
         &res.last_rows,

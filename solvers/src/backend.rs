@@ -70,8 +70,11 @@ pub enum QpError {
         /// Why it is rejected.
         reason: &'static str,
     },
-    /// The backend name is not one of [`crate::BACKEND_NAMES`].
-    #[error("unknown backend {0:?} (expected one of clarabel, osqp, uzawa)")]
+    /// The backend name is not one of [`crate::BACKEND_NAMES`] (which the message lists).
+    #[error(
+        "unknown backend {0:?} (expected one of {names})",
+        names = crate::BACKEND_NAMES.join(", ")
+    )]
     UnknownBackend(String),
     /// Warm start vectors of the wrong length.
     #[error("warm start {what} has length {found}, expected {expected}")]
@@ -128,6 +131,9 @@ pub struct QpSettings {
     pub max_iter: usize,
     /// Wall-clock limit in seconds (`f64::INFINITY` for none).
     pub time_limit_s: f64,
+    /// Remove zero rows and positive multiples of other rows before the solve and map the
+    /// duals back ([`crate::presolve`]); applied by [`crate::backend_from_name`].
+    pub presolve: bool,
 }
 
 impl Default for QpSettings {
@@ -137,6 +143,7 @@ impl Default for QpSettings {
             eps_rel: 1e-9,
             max_iter: 100_000,
             time_limit_s: f64::INFINITY,
+            presolve: true,
         }
     }
 }

@@ -29,6 +29,7 @@ pub mod backend;
 pub mod clarabel_backend;
 pub mod linalg;
 pub mod osqp_backend;
+pub mod presolve;
 pub mod qp;
 pub mod qps;
 pub mod registry;

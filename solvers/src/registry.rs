@@ -128,10 +128,14 @@ pub fn backend(name: &str) -> Option<&'static Backend> {
     BACKENDS.iter().find(|b| b.name == name)
 }
 
-/// Builds a backend from its name and the common settings (validated first).
+/// Builds a backend from its name and the common settings (validated first), behind the row
+/// presolve of [`crate::presolve`] when `settings.presolve`.
 pub fn backend_from_name(name: &str, settings: &QpSettings) -> Result<Box<dyn QpBackend>, QpError> {
     settings.validate()?;
     match backend(name) {
+        Some(b) if settings.presolve => Ok(Box::new(crate::presolve::Presolved::new((b.build)(
+            settings.clone(),
+        )))),
         Some(b) => Ok((b.build)(settings.clone())),
         None => Err(QpError::UnknownBackend(name.to_string())),
     }
@@ -185,6 +189,17 @@ mod tests {
             );
         }
         assert!(backend("gurobi").is_none());
+        // the refusal lists every registered backend
+        let e = backend_from_name("gurobi", &QpSettings::default())
+            .err()
+            .expect("gurobi is not registered");
+        assert_eq!(
+            e.to_string(),
+            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, osqp, uzawa)"
+        );
+        for name in BACKEND_NAMES {
+            assert!(e.to_string().contains(name), "{name}");
+        }
         assert_eq!(
             backend_list_help(),
             "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \

@@ -15,6 +15,7 @@ fn settings() -> QpSettings {
         eps_rel: 1e-10,
         max_iter: 200_000,
         time_limit_s: 10.0,
+        presolve: true,
     }
 }
 

@@ -142,6 +142,7 @@ fn uzawa_settings() -> QpSettings {
         eps_rel: 1e-8,
         max_iter: 20_000,
         time_limit_s: f64::INFINITY,
+        presolve: true,
     }
 }
 
@@ -151,6 +152,7 @@ fn osqp_settings() -> QpSettings {
         eps_rel: 1e-7,
         max_iter: 100_000,
         time_limit_s: f64::INFINITY,
+        presolve: true,
     }
 }
 
@@ -320,6 +322,7 @@ fn clarabel_settings() -> QpSettings {
         eps_rel: 1e-9,
         max_iter: 200,
         time_limit_s: f64::INFINITY,
+        presolve: true,
     }
 }
 
@@ -558,6 +561,7 @@ fn timing_reuse_vs_fresh() {
         eps_rel: 1e-8,
         max_iter: 200,
         time_limit_s: f64::INFINITY,
+        presolve: true,
     };
     let mut reused = UzawaBackend::new(st.clone());
     let (mut t_reuse, mut t_fresh, mut iters) = (0.0, 0.0, 0);

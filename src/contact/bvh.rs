@@ -255,6 +255,147 @@ impl<const D: usize> Bvh<D> {
     pub fn nodes(&self) -> usize {
         self.nodes.len()
     }
+
+    /// The box of node `i` (preorder index; 0 is the root).
+    #[inline]
+    pub fn node_box(&self, i: usize) -> ([f64; D], [f64; D]) {
+        (self.nodes[i].lo, self.nodes[i].hi)
+    }
+
+    /// Per-node boxes of another quantity of the items (e.g. their displacements): node `i`'s
+    /// box bounds `item_box(k)` over every item `k` below it. Children follow their parent in
+    /// preorder, so one pass from the last node to the first computes them.
+    pub fn refit<const E: usize>(&self, item_box: impl Fn(u32) -> Aabb<E>) -> Vec<Aabb<E>> {
+        let empty = ([f64::INFINITY; E], [f64::NEG_INFINITY; E]);
+        let mut out = vec![empty; self.nodes.len()];
+        for i in (0..self.nodes.len()).rev() {
+            let node = &self.nodes[i];
+            let mut b = empty;
+            let mut add = |(l, h): Aabb<E>| {
+                for c in 0..E {
+                    b.0[c] = b.0[c].min(l[c]);
+                    b.1[c] = b.1[c].max(h[c]);
+                }
+            };
+            if node.count > 0 {
+                let k0 = node.index as usize;
+                for &item in &self.items[k0..k0 + node.count as usize] {
+                    add(item_box(item));
+                }
+            } else {
+                add(out[i + 1]);
+                add(out[node.index as usize]);
+            }
+            out[i] = b;
+        }
+        out
+    }
+
+    /// Dual traversal of `self` and `other` (or of `self` with itself when `other` is `None`):
+    /// node pairs `(i, j)` (`i` of `self`, `j` of the other tree) for which `keep(i, j)` holds
+    /// are refined down to their leaves, and `leaf(a, b, out)` is called for every item pair
+    /// of two kept leaves (with itself: every unordered pair of distinct items once). `keep`
+    /// must be conservative: false only when no item pair below `(i, j)` is wanted. The work
+    /// is split into independent node pairs processed in parallel; the results are
+    /// concatenated in a fixed order, so they do not depend on the number of threads.
+    pub fn dual<R: Send>(
+        &self,
+        other: Option<&Bvh<D>>,
+        keep: &(dyn Fn(usize, usize) -> bool + Sync),
+        leaf: &(dyn Fn(u32, u32, &mut Vec<R>) + Sync),
+    ) -> Vec<R> {
+        let same = other.is_none();
+        let other = other.unwrap_or(self);
+        if self.nodes.is_empty() || other.nodes.is_empty() {
+            return Vec::new();
+        }
+        // Node pairs refined breadth-first until there are enough for the threads.
+        let mut frontier: Vec<(usize, usize)> = vec![(0, 0)];
+        for _ in 0..64 {
+            if frontier.len() >= 512 {
+                break;
+            }
+            let mut next = Vec::with_capacity(4 * frontier.len());
+            let mut split = false;
+            for &(i, j) in &frontier {
+                if !keep(i, j) {
+                    continue;
+                }
+                let before = next.len();
+                self.children_pairs(other, same, i, j, &mut next);
+                if next.len() == before {
+                    next.push((i, j));
+                } else {
+                    split = true;
+                }
+            }
+            frontier = next;
+            if !split {
+                break;
+            }
+        }
+        use rayon::prelude::*;
+        let parts: Vec<Vec<R>> = frontier
+            .par_iter()
+            .map(|&start| {
+                let mut out = Vec::new();
+                let mut stack = vec![start];
+                let mut kids = Vec::with_capacity(4);
+                while let Some((i, j)) = stack.pop() {
+                    if !keep(i, j) {
+                        continue;
+                    }
+                    kids.clear();
+                    self.children_pairs(other, same, i, j, &mut kids);
+                    if kids.is_empty() {
+                        let (a, b) = (&self.nodes[i], &other.nodes[j]);
+                        let (a0, b0) = (a.index as usize, b.index as usize);
+                        for ka in a0..a0 + a.count as usize {
+                            let kb0 = if same && i == j { ka + 1 } else { b0 };
+                            for kb in kb0..b0 + b.count as usize {
+                                leaf(self.items[ka], other.items[kb], &mut out);
+                            }
+                        }
+                    } else {
+                        // reversed, so that the pairs are visited in the order listed
+                        stack.extend(kids.iter().rev());
+                    }
+                }
+                out
+            })
+            .collect();
+        parts.into_iter().flatten().collect()
+    }
+
+    /// The node pairs `(i, j)` refines into (none for two leaves): the larger internal node is
+    /// split (a leaf against an internal node splits the internal one); with itself, `(i, i)`
+    /// gives `(l, l)`, `(l, r)`, `(r, r)`.
+    fn children_pairs(
+        &self,
+        other: &Bvh<D>,
+        same: bool,
+        i: usize,
+        j: usize,
+        out: &mut Vec<(usize, usize)>,
+    ) {
+        let (a, b) = (&self.nodes[i], &other.nodes[j]);
+        let (a_leaf, b_leaf) = (a.count > 0, b.count > 0);
+        if a_leaf && b_leaf {
+            return;
+        }
+        if same && i == j {
+            let (l, r) = (i + 1, a.index as usize);
+            out.extend([(l, l), (l, r), (r, r)]);
+            return;
+        }
+        let extent = |n: &Node<D>| (0..D).map(|c| n.hi[c] - n.lo[c]).fold(0.0f64, f64::max);
+        let split_a = !a_leaf && (b_leaf || extent(a) >= extent(b));
+        if split_a {
+            out.extend([(i + 1, j), (a.index as usize, j)]);
+        } else {
+            out.extend([(i, j + 1), (i, b.index as usize)]);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -494,6 +635,93 @@ mod tests {
         }
         for m in [65_535, 65_536, 65_537, 1_000_003] {
             assert_eq!(leaf_count(m), leaves(m), "m = {m}");
+        }
+    }
+
+    /// The dual traversal finds exactly the overlapping item pairs, between two trees and
+    /// within one (each unordered pair once), whatever the thread count.
+    #[test]
+    fn dual_traversal_equals_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for n in [0usize, 1, 3, 5, 40, 700] {
+            let a: Vec<Aabb<2>> = random_boxes(&mut rng, n);
+            let b: Vec<Aabb<2>> = random_boxes(&mut rng, n / 2 + 3);
+            let (ta, tb) = (Bvh::build(&a), Bvh::build(&b));
+            let ov = |x: &Aabb<2>, y: &Aabb<2>| overlaps(&x.0, &x.1, &y.0, &y.1);
+            let keep_ab = |i: usize, j: usize| {
+                let (x, y) = (ta.node_box(i), tb.node_box(j));
+                ov(&x, &y)
+            };
+            let leaf_ab = |p: u32, q: u32, out: &mut Vec<(u32, u32)>| {
+                if ov(&a[p as usize], &b[q as usize]) {
+                    out.push((p, q));
+                }
+            };
+            let mut got = ta.dual(Some(&tb), &keep_ab, &leaf_ab);
+            got.sort_unstable();
+            let mut want = Vec::new();
+            for (p, bp) in a.iter().enumerate() {
+                for (q, bq) in b.iter().enumerate() {
+                    if ov(bp, bq) {
+                        want.push((p as u32, q as u32));
+                    }
+                }
+            }
+            assert_eq!(got, want, "n = {n}");
+            let keep_aa = |i: usize, j: usize| ov(&ta.node_box(i), &ta.node_box(j));
+            let leaf_aa = |p: u32, q: u32, out: &mut Vec<(u32, u32)>| {
+                if ov(&a[p as usize], &a[q as usize]) {
+                    out.push((p.min(q), p.max(q)));
+                }
+            };
+            let one = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
+            let serial = one.install(|| ta.dual(None, &keep_aa, &leaf_aa));
+            let mut got = ta.dual(None, &keep_aa, &leaf_aa);
+            assert_eq!(got, serial, "thread-count independent, n = {n}");
+            got.sort_unstable();
+            let mut want = Vec::new();
+            for (p, bp) in a.iter().enumerate() {
+                for (q, bq) in a.iter().enumerate().skip(p + 1) {
+                    if ov(bp, bq) {
+                        want.push((p as u32, q as u32));
+                    }
+                }
+            }
+            assert_eq!(got, want, "self, n = {n}");
+        }
+    }
+
+    /// `refit` bounds every item's box in every node's subtree.
+    #[test]
+    fn refit_bounds_the_items_below_each_node() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let a: Vec<Aabb<2>> = random_boxes(&mut rng, 300);
+        let t = Bvh::build(&a);
+        let other: Vec<Aabb<3>> = (0..300)
+            .map(|i| {
+                let v = [i as f64, -(i as f64), (i % 7) as f64];
+                (v, v)
+            })
+            .collect();
+        let fit = t.refit(|k| other[k as usize]);
+        assert_eq!(fit.len(), t.nodes());
+        // the root bounds everything, tightly
+        assert_eq!(fit[0].0, [0.0, -299.0, 0.0]);
+        assert_eq!(fit[0].1, [299.0, 0.0, 6.0]);
+        // a leaf bounds exactly its own items
+        for (i, node) in t.nodes.iter().enumerate() {
+            if node.count > 0 {
+                let k0 = node.index as usize;
+                for &item in &t.items[k0..k0 + node.count as usize] {
+                    let (l, h) = other[item as usize];
+                    for c in 0..3 {
+                        assert!(fit[i].0[c] <= l[c] && h[c] <= fit[i].1[c]);
+                    }
+                }
+            }
         }
     }
 }

@@ -29,6 +29,7 @@ pub mod broad_phase;
 pub mod bvh;
 pub mod distance;
 pub mod edge_edge;
+pub mod motion;
 pub mod point_edge;
 pub mod point_triangle;
 

@@ -14,7 +14,7 @@ use crate::solve::dynamics::{
 };
 use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
-use crate::solve::settings::Accuracy;
+use crate::solve::settings::{tol_kappa, Accuracy};
 use anyhow::Result;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
 use std::time::Instant;
@@ -48,7 +48,8 @@ pub struct CaseOutcome {
     pub res: RunResult,
     /// Every iteration record.
     pub records: Vec<IterationRecord>,
-    /// Diagnostics of a converged run, with the tolerance of the canonical-dual QP.
+    /// Diagnostics of a run that stopped on the stopping rule (`converged` or `fixed_point`),
+    /// with the tolerance of the canonical-dual QP.
     pub diagnostics: Option<(ConvergedDiagnostics, f64)>,
     /// The backend settings used.
     pub qp: QpSettings,
@@ -90,6 +91,7 @@ pub fn lemma_diagnostics_with(
             &scene.mesh,
             &scene.energy,
             &res.x,
+            &res.psi,
             scene.eps,
             scene.h,
             &res.last_rows,
@@ -106,12 +108,16 @@ pub fn lemma_diagnostics_with(
     Ok(last.expect("DIAG_QP_TOLS is not empty"))
 }
 
-/// The outer-loop settings of a case, static or dynamic: the preset's tol_J unless overridden,
-/// max_outer, pruning and max_inner (the time limit is a static run's, set by
+/// The outer-loop settings of a case, static or dynamic: the preset's tol_J unless overridden
+/// (and the certificate's tolerance √tol_J), the backend's tolerance, max_outer, pruning and
+/// max_inner (the time limit is a static run's, set by
 /// [`execute_with`]).
 pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
+    let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
     let mut settings = OuterSettings {
-        tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
+        tol_j,
+        tol_kappa: tol_kappa(tol_j),
+        qp_tol: cs.accuracy.qp_tol(&cs.backend),
         max_outer: cs.max_outer,
         pruning: cs.pruning,
         ..Default::default()
@@ -123,8 +129,8 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings
 }
 
-/// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a converged
-/// run.
+/// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a run that
+/// stopped on the stopping rule (`converged` or `fixed_point`).
 pub fn execute(
     scene: &Scene,
     cs: &CaseSettings,
@@ -161,7 +167,7 @@ pub fn execute_with(
         },
     )?;
     let t = Instant::now();
-    let diagnostics = if res.status == RunStatus::Converged {
+    let diagnostics = if matches!(res.status, RunStatus::Converged | RunStatus::FixedPoint) {
         Some(lemma_diagnostics(scene, &res)?)
     } else {
         None

@@ -6,7 +6,8 @@
 //! shared by two bodies (a membrane glued to its support) counts for both.
 
 use crate::contact::{near_pairs, pair_rows, rows_for, ContactPair, PairRows};
-use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::mesh::Mesh;
+use crate::solve::h1::h1_gram;
 
 /// Unordered body pairs `(i, j)`, `i ≤ j`, in contact at `x` (`i = j`: self-contact), among
 /// `pairs` (e.g. [`near_pairs`] within `1.01 ε`).
@@ -196,7 +197,8 @@ fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
     (d.col, d.nfree)
 }
 
-/// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (the fixed dofs
+/// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (on the scene's
+/// own reference positions) (the fixed dofs
 /// are equal in any two configurations of one scene). The position error of the speed/accuracy
 /// trade-off.
 pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
@@ -216,84 +218,6 @@ pub fn h1_distance(mesh: &Mesh, x: &[f64], y: &[f64]) -> f64 {
         .sum::<f64>()
         .max(0.0)
         .sqrt()
-}
-
-/// The H¹ Gram matrix `G = M + K` of P1 functions on the reference mesh (curves: their edges;
-/// 2D solids and 3D surfaces: their triangles, with tangential gradients on surfaces; 3D solids:
-/// their tetrahedra), one copy per coordinate, restricted to the free dofs (upper triangle,
-/// CSC).
-pub fn h1_gram(mesh: &Mesh) -> CscMatrix {
-    let (col, nfree) = free_cols(mesh);
-    let d = mesh.dim;
-    let mut trip: Vec<(usize, usize, f64)> = Vec::new();
-    let mut add = |vs: &[usize], m: &dyn Fn(usize, usize) -> f64| {
-        for (i, &vi) in vs.iter().enumerate() {
-            for (j, &vj) in vs.iter().enumerate() {
-                for c in 0..d {
-                    let (ri, rj) = (col[d * vi + c], col[d * vj + c]);
-                    if ri != usize::MAX && rj != usize::MAX && ri <= rj {
-                        trip.push((ri, rj, m(i, j)));
-                    }
-                }
-            }
-        }
-    };
-    let xr = &mesh.x_ref;
-    let pt = |v: usize| mesh.point(xr, v);
-    for body in &mesh.bodies {
-        match (body.kind, mesh.dim) {
-            (BodyKind::Curve, _) => {
-                for &e in &body.edges {
-                    let [a, b] = mesh.edges[e];
-                    let l = (pt(a) - pt(b)).norm();
-                    add(&[a, b], &|i, j| {
-                        let mass = if i == j { l / 3.0 } else { l / 6.0 };
-                        let stiff = if i == j { 1.0 / l } else { -1.0 / l };
-                        mass + stiff
-                    });
-                }
-            }
-            // triangles: 2D solids, 3D surfaces (tangential gradients)
-            (BodyKind::Solid, 2) | (BodyKind::Surface, _) => {
-                for &t in &body.triangles {
-                    let vs = mesh.triangles[t];
-                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
-                    let nrm = (p[1] - p[0]).cross(&(p[2] - p[0]));
-                    let area = 0.5 * nrm.norm();
-                    // ∇φ_i = n̂ × e_i / (2·area), e_i the edge opposite vertex i (cyclic):
-                    // ∇φ_i·∇φ_j = e_i·e_j / (4·area²).
-                    let e: Vec<_> = (0..3).map(|i| p[(i + 2) % 3] - p[(i + 1) % 3]).collect();
-                    add(&vs, &|i, j| {
-                        let mass = if i == j { area / 6.0 } else { area / 12.0 };
-                        mass + e[i].dot(&e[j]) / (4.0 * area)
-                    });
-                }
-            }
-            (BodyKind::Solid, _) => {
-                for &t in &body.tets {
-                    let vs = mesh.tets[t];
-                    let p: Vec<_> = vs.iter().map(|&v| pt(v)).collect();
-                    let m =
-                        nalgebra::Matrix3::from_columns(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]);
-                    let vol = m.determinant() / 6.0;
-                    let Some(minv) = m.try_inverse() else {
-                        continue;
-                    };
-                    // ∇φ_1..3 are the rows of M⁻¹, ∇φ_0 = −Σ.
-                    let mut grads = [nalgebra::Vector3::zeros(); 4];
-                    for k in 0..3 {
-                        grads[k + 1] = minv.row(k).transpose();
-                    }
-                    grads[0] = -(grads[1] + grads[2] + grads[3]);
-                    add(&vs, &|i, j| {
-                        let mass = if i == j { vol / 10.0 } else { vol / 20.0 };
-                        mass + vol * grads[i].dot(&grads[j])
-                    });
-                }
-            }
-        }
-    }
-    CscMatrix::from_triplets(nfree, nfree, &trip).expect("indices in range, values finite")
 }
 
 /// The gradient of row `i` of a pair, `n·(φ(p) − φ(q))`, as `(dof, value)` entries on the free
@@ -357,8 +281,12 @@ fn max_abs(v: &[f64]) -> f64 {
 /// Lemma 5.4 / 5.6 diagnostics at a converged configuration `x` (= φ_h) of a run whose last
 /// sub-problem had rows `last_rows` and duals `last_mult` (docs/method.md, "Diagnostics of a converged run").
 ///
-/// * **Rows** of T(φ_h): every contact pair closer than `ε + active_tol + 1e-9·ε`, built at
-///   ψ = φ_h; a row is active when its value is at most `ε + active_tol`.
+/// * **Rows** of T(ψ), `psi` the last sub-problem's ψ (`RunResult::psi`; φ_h ≈ ψ at a fixed
+///   point): every contact pair closer than `ε + active_tol + 1e-9·ε` at φ_h; a row is active
+///   when its value at φ_h is at most `ε + active_tol`. Built at ψ rather than at φ_h because
+///   after the polish at ε (docs/method.md, "The row margin") these are the rows φ_h meets
+///   with equality: at a contact on a polygon's vertex the normal at φ_h turns by about
+///   displacement/ε, so rows rebuilt at φ_h move by (h/ε)·δ and fall out of the active band.
 /// * **Canonical duals** (docs/method.md, canonical duals): with `A` the active rows' gradients and
 ///   `g = J'(φ_h)` on the free dofs, the duals minimize `½|Aᵀμ − g|² + ½τ|μ|²` over `μ ≥ 0`,
 ///   `τ = tikhonov_rel · max diag(AAᵀ)`: a non-negative least-squares problem whose solution
@@ -375,6 +303,7 @@ pub fn converged_diagnostics(
     mesh: &Mesh,
     energy: &TotalEnergy,
     x: &[f64],
+    psi: &[f64],
     eps: f64,
     h: f64,
     last_rows: &[PairRows],
@@ -404,11 +333,12 @@ pub fn converged_diagnostics(
         }
     }
 
-    // Rows of T(φ_h) near contact, and (with `raw_dual_rel`) the rows the last sub-problem's
-    // duals hold: a backend leaves an active row within its own tolerance of ε + δ, which at
-    // small ε/h is far more than `active_tol`, so a row whose raw dual is above `raw_dual_rel`
-    // of the largest (an interior-point backend leaves small positive duals on inactive rows,
-    // far below 1e-4 of it) counts as active whatever its gap.
+    // Rows of T(ψ) near contact at φ_h, ψ the last sub-problem's (φ_h ≈ ψ at a fixed point;
+    // after the polish at ε, the rows φ_h satisfies with equality); and (with `raw_dual_rel`)
+    // the rows the last sub-problem's duals hold: a backend leaves an active row within its
+    // own tolerance of ε + δ, which at small ε/h is far more than `active_tol`, so a row whose
+    // raw dual is above `raw_dual_rel` of the largest (an interior-point backend leaves small
+    // positive duals on inactive rows, far below 1e-4 of it) counts as active whatever its gap.
     let reach = eps + settings.active_tol + 1e-9 * eps;
     let mut near = near_pairs(mesh, x, reach, true);
     let max_raw = last_mult
@@ -431,7 +361,7 @@ pub fn converged_diagnostics(
     extra.dedup();
     let listed: std::collections::HashSet<ContactPair> = near.iter().copied().collect();
     near.extend(extra.into_iter().filter(|p| !listed.contains(p)));
-    let rows = rows_for(mesh, x, &near).ok_or(DiagnosticsError::ZeroDistance)?;
+    let rows = rows_for(mesh, psi, &near).ok_or(DiagnosticsError::ZeroDistance)?;
     let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row)
     let mut active_flags = vec![[false; 4]; rows.len()];
     for (k, r) in rows.iter().enumerate() {
@@ -555,7 +485,7 @@ pub fn converged_diagnostics(
             first,
             second,
             rows: r.len,
-            distance: r.distance,
+            distance: pair_rows(mesh, x, r.pair).map_or(0.0, |q| q.distance),
             weight: r.weight,
             active: active_flags[k],
             mu: mu[k],

@@ -181,6 +181,9 @@ pub struct StaticRow {
     /// Canonical stationarity relative to the gradient.
     #[serde(serialize_with = "opt_float")]
     pub stationarity_rel: Option<f64>,
+    /// The minimality certificate κ at the returned state (every finished run).
+    #[serde(serialize_with = "opt_float")]
+    pub kappa: Option<f64>,
     /// Pairs of the last iterate.
     pub pairs: Option<usize>,
     /// Active rows (of the diagnostics, else of the last iterate).
@@ -242,6 +245,7 @@ impl StaticRow {
             t_assembly_s: Some(sum(|x| x.t_assembly_s)),
             t_solve_s: Some(sum(|x| x.t_solve_s)),
             t_diagnostics_s: Some(o.t_diagnostics_s),
+            kappa: Some(r.certificate.kappa),
             ..Default::default()
         };
         if let Some((d, _)) = &o.diagnostics {
@@ -447,15 +451,27 @@ pub struct ScalingRow {
     pub pairs: String,
     /// Rows at the first step.
     pub rows: String,
-    /// Seconds in the pair search (first step).
-    pub t_pairs_s: String,
-    /// Seconds in the assembly (first step).
-    pub t_assembly_s: String,
-    /// Seconds in the backend (first step).
-    pub t_solve_s: String,
-    /// Seconds of the first step.
-    pub t_step_s: String,
-    /// Wall time.
+    /// Seconds in the pair search of the first outer step.
+    #[serde(alias = "t_pairs_s")]
+    pub step1_t_pairs_s: String,
+    /// Seconds in the assembly of the first outer step.
+    #[serde(alias = "t_assembly_s")]
+    pub step1_t_assembly_s: String,
+    /// Seconds in the backend in the first outer step.
+    #[serde(alias = "t_solve_s")]
+    pub step1_t_solve_s: String,
+    /// Seconds of the first outer step (the sum of the three).
+    #[serde(alias = "t_step_s")]
+    pub step1_t_step_s: String,
+    /// Seconds in the pair search, summed over the run's outer steps.
+    pub total_t_pairs_s: String,
+    /// Seconds in the assembly, summed over the run's outer steps.
+    pub total_t_assembly_s: String,
+    /// Seconds in the backend, summed over the run's outer steps.
+    pub total_t_solve_s: String,
+    /// QP solves of the run (inner steps and lazy re-solves).
+    pub qp_solves: String,
+    /// Wall time of the whole run.
     pub wall_time_s: String,
     /// Peak resident memory, MiB.
     pub peak_rss_mb: String,
@@ -479,10 +495,14 @@ impl Default for ScalingRow {
             inner_iterations: String::new(),
             pairs: String::new(),
             rows: String::new(),
-            t_pairs_s: String::new(),
-            t_assembly_s: String::new(),
-            t_solve_s: String::new(),
-            t_step_s: String::new(),
+            step1_t_pairs_s: String::new(),
+            step1_t_assembly_s: String::new(),
+            step1_t_solve_s: String::new(),
+            step1_t_step_s: String::new(),
+            total_t_pairs_s: String::new(),
+            total_t_assembly_s: String::new(),
+            total_t_solve_s: String::new(),
+            qp_solves: String::new(),
             wall_time_s: String::new(),
             peak_rss_mb: String::new(),
             final_energy: String::new(),
@@ -543,7 +563,7 @@ mod tests {
         let stat = "dim,h,eps,qp_tol,tol_j,max_inner,status,outer_iterations,inner_iterations,\
                     backend_iterations,final_energy,min_distance,all_admissible,energy_monotone,\
                     residual_hm1,bound,ratio,lambda_norm_h,c_phi,max_edges_per_vertex,\
-                    stationarity_rel,pairs,active_rows,wall_time_s,t_pairs_s,t_assembly_s,\
+                    stationarity_rel,kappa,pairs,active_rows,wall_time_s,t_pairs_s,t_assembly_s,\
                     t_solve_s,t_diagnostics_s,energy_error,position_error_h1,max_violation,\
                     reference_energy,error";
         let dynamic = "dim,h,eps,dt,steps,scheme,qp_tol,tol_j,status,steps_taken,\
@@ -552,8 +572,9 @@ mod tests {
                        force_mean_rest,force_jump_rest,force_std_rest,weight_ratio_rest,\
                        outer_iterations,max_outer_per_step,wall_time_s,t_total_s,error";
         let scaling = "n,vertices,pruning,kind,trust_delta0,max_inner,status,outer_iterations,\
-                       inner_iterations,pairs,rows,t_pairs_s,t_assembly_s,t_solve_s,t_step_s,\
-                       wall_time_s,peak_rss_mb,final_energy,backend";
+                       inner_iterations,pairs,rows,step1_t_pairs_s,step1_t_assembly_s,\
+                       step1_t_solve_s,step1_t_step_s,total_t_pairs_s,total_t_assembly_s,\
+                       total_t_solve_s,qp_solves,wall_time_s,peak_rss_mb,final_energy,backend";
         let index = "k,file,variables,rows,nnz_p,nnz_a,status,iterations,objective";
         assert_eq!(header::<CaseColumns>().join(","), case);
         assert_eq!(
@@ -566,6 +587,20 @@ mod tests {
         );
         assert_eq!(header::<ScalingRow>().join(","), scaling);
         assert_eq!(header::<QpIndexRow>().join(","), index);
+    }
+
+    /// A scaling CSV written before the first-step columns were renamed is read under the new
+    /// names (so a resumed experiment keeps its rows).
+    #[test]
+    fn scaling_rows_read_the_old_first_step_columns() {
+        let old = "n,vertices,pruning,kind,status,t_pairs_s,t_assembly_s,t_solve_s,t_step_s,\
+                   wall_time_s\n25,104,lazy,one_step,one_step_done,0.1,0.2,0.3,0.6,1.5\n";
+        let mut rd = csv::Reader::from_reader(old.as_bytes());
+        let row: ScalingRow = rd.deserialize().next().unwrap().unwrap();
+        assert_eq!(row.step1_t_pairs_s, "0.1");
+        assert_eq!(row.step1_t_step_s, "0.6");
+        assert_eq!(row.total_t_solve_s, "");
+        assert_eq!(row.wall_time_s, "1.5");
     }
 
     #[test]
@@ -592,7 +627,7 @@ mod tests {
             "{line}"
         );
         assert!(
-            line.ends_with(",true,,,,,,,,,,,,,,,,,,,,\"bad \"\"x\"\"\"\n"),
+            line.ends_with(",true,,,,,,,,,,,,,,,,,,,,,\"bad \"\"x\"\"\"\n"),
             "{line}"
         );
         assert_eq!(f(f64::NAN), "");

@@ -20,6 +20,7 @@ use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
+use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
@@ -27,8 +28,14 @@ use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
 
+// The field docs are the command line's help texts (clap prints them as written), not
+// rustdoc: `[dynamics]` names a scene-file table and `<scene>` a placeholder.
 #[derive(clap::Args, Clone)]
-#[allow(missing_docs)]
+#[allow(
+    missing_docs,
+    rustdoc::broken_intra_doc_links,
+    rustdoc::invalid_html_tags
+)]
 pub struct RunArgs {
     /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
     /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (docs/scene-files.md), whose `[solver]` settings apply unless the corresponding flag is given.
@@ -171,8 +178,11 @@ fn parse_perturb(s: &str) -> Result<(usize, f64), String> {
 
 #[derive(serde::Serialize)]
 struct Summary {
-    /// Lemma 5.4 / 5.6 diagnostics (converged runs only).
+    /// Lemma 5.4 / 5.6 diagnostics (runs stopped by the stopping rule: `converged`,
+    /// `fixed_point`).
     diagnostics: Option<DiagSummary>,
+    /// The minimality certificate at the returned state (every run).
+    certificate: Certificate,
     scene: String,
     dim: usize,
     n: usize,
@@ -186,6 +196,8 @@ struct Summary {
     backend_iterations: usize,
     initial_energy: f64,
     final_energy: f64,
+    /// The final polish at ε (docs/method.md, "The row margin"), when it ran.
+    polish: Option<crate::solve::outer::Polish>,
     min_distance: f64,
     closest_pair: String,
     wall_time_s: f64,
@@ -521,11 +533,12 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     };
     write_svg(&out.join("shapes.svg"), &svg)?;
     // multipliers.csv whatever the status (the canonical duals at the returned iterate); the
-    // summary's diagnostics for converged runs only
+    // summary's diagnostics for the runs at a fixed point only (converged, fixed_point)
     let diag_settings = DiagnosticSettings {
         raw_dual_rel: Some(1e-4),
         ..DiagnosticSettings::for_eps(scene.eps)
     };
+    let at_fixed_point = matches!(res.status, RunStatus::Converged | RunStatus::FixedPoint);
     let diagnostics = match case::lemma_diagnostics_with(&scene, &res, &diag_settings) {
         Ok((diag, tol)) => {
             let mut w = csv::Writer::from_writer(Vec::new());
@@ -533,15 +546,16 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
                 w.serialize(PairRow::from(p))?;
             }
             write_atomic(&out.join("multipliers.csv"), &w.into_inner()?)?;
-            (res.status == RunStatus::Converged).then_some((diag, tol))
+            at_fixed_point.then_some((diag, tol))
         }
-        Err(e) if res.status == RunStatus::Converged => return Err(e),
+        Err(e) if at_fixed_point => return Err(e),
         Err(e) => {
             eprintln!("multipliers.csv not written: {e:#}");
             None
         }
     };
     let summary = Summary {
+        certificate: res.certificate.clone(),
         diagnostics: diagnostics
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),
@@ -558,6 +572,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         backend_iterations: res.backend_iterations,
         initial_energy: energies[0].1,
         final_energy: res.energy,
+        polish: res.polish,
         min_distance: res.min_distance.distance,
         closest_pair: res.min_distance.pair.to_string(),
         wall_time_s: res.wall_time_s,
@@ -576,11 +591,12 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{}: status {} after {} outer iterations, J = {:.12e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        "{}: status {} after {} outer iterations, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
         res.energy,
+        res.certificate.kappa,
         state,
         res.min_distance.distance / scene.eps,
         res.wall_time_s,

@@ -98,8 +98,10 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         n: a.n,
         ..Default::default()
     })?;
-    let mut backend = backend_from_name(&a.backend, &default_settings(&a.backend))?;
+    let qps = default_settings(&a.backend);
+    let mut backend = backend_from_name(&a.backend, &qps)?;
     let mut settings = OuterSettings {
+        qp_tol: qps.eps_abs,
         max_outer: a.max_outer,
         pruning,
         ..Default::default()
@@ -107,6 +109,8 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
     settings.trust.delta0 = a.trust_delta0;
     settings.inner.max_inner = a.max_inner;
     let mut first = None;
+    // Per-run totals over the outer steps: (pairs, assembly, solve) seconds and QP solves.
+    let mut total = (0.0, 0.0, 0.0, 0usize);
     let res = run(
         &scene.mesh,
         &scene.energy,
@@ -118,6 +122,10 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
             if r.iteration == 1 {
                 first = Some(r.clone());
             }
+            total.0 += r.t_pairs_s;
+            total.1 += r.t_assembly_s;
+            total.2 += r.t_solve_s;
+            total.3 += r.inner_iterations + r.lazy_rounds;
         },
     )?;
     let f = first.context("no outer step was taken")?;
@@ -131,17 +139,21 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         "vertices": scene.mesh.nv(),
         "pruning": pruning.as_str(),
         "kind": if a.max_outer == 1 { "one_step" } else { "full" },
-        "trust_delta0": a.trust_delta0,
+        "trust_delta0": delta0_cell(a.trust_delta0),
         "max_inner": a.max_inner,
         "status": status,
         "outer_iterations": res.outer_iterations,
         "inner_iterations": if a.max_outer == 1 { f.inner_iterations } else { res.inner_iterations },
         "pairs": f.pairs,
         "rows": f.rows,
-        "t_pairs_s": f.t_pairs_s,
-        "t_assembly_s": f.t_assembly_s,
-        "t_solve_s": f.t_solve_s,
-        "t_step_s": f.t_pairs_s + f.t_assembly_s + f.t_solve_s,
+        "step1_t_pairs_s": f.t_pairs_s,
+        "step1_t_assembly_s": f.t_assembly_s,
+        "step1_t_solve_s": f.t_solve_s,
+        "step1_t_step_s": f.t_pairs_s + f.t_assembly_s + f.t_solve_s,
+        "total_t_pairs_s": total.0,
+        "total_t_assembly_s": total.1,
+        "total_t_solve_s": total.2,
+        "qp_solves": total.3,
         "wall_time_s": res.wall_time_s,
         "peak_rss_mb": peak_rss_mb(),
         "final_energy": res.energy,
@@ -178,15 +190,26 @@ fn write_rows(path: &Path, rows: &[ScalingRow]) -> Result<()> {
     Ok(())
 }
 
-/// A row's key: `(n, pruning, kind, trust_delta0, max_inner)` (the last two as written).
+/// The `trust_delta0` cell of δ0: Rust's shortest form of the number (`1`, `0.25`), the form
+/// of the committed CSV and of the resume key.
+fn delta0_cell(delta0: f64) -> String {
+    delta0.to_string()
+}
+
+/// A row's key: `(n, pruning, kind, trust_delta0, max_inner)`; `trust_delta0` as a number
+/// (rows written as `1.0` by earlier binaries match δ0 = 1), `max_inner` as written.
 type Key = (usize, String, String, String, String);
 
 fn key(r: &ScalingRow) -> Key {
+    let delta0 = r
+        .trust_delta0
+        .parse()
+        .map_or_else(|_| r.trust_delta0.clone(), delta0_cell);
     (
         r.n.parse().unwrap_or(0),
         r.pruning.clone(),
         r.kind.clone(),
-        r.trust_delta0.clone(),
+        delta0,
         r.max_inner.clone(),
     )
 }
@@ -220,7 +243,7 @@ fn run_case(a: &ScalingArgs, n: usize, mode: &str, max_outer: usize) -> Result<S
         vertices: String::new(),
         pruning: mode.to_string(),
         kind: if max_outer == 1 { "one_step" } else { "full" }.to_string(),
-        trust_delta0: a.trust_delta0.to_string(),
+        trust_delta0: delta0_cell(a.trust_delta0),
         max_inner: a.max_inner.to_string(),
         status,
         wall_time_s: format!("{:.1}", start.elapsed().as_secs_f64()),
@@ -317,7 +340,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
             n,
             m.clone(),
             kind.to_string(),
-            a.trust_delta0.to_string(),
+            delta0_cell(a.trust_delta0),
             a.max_inner.to_string(),
         );
         if rows.iter().any(|r| key(r) == k) {
@@ -330,7 +353,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         eprintln!(
             "{} (step {} s, wall {} s, peak {} MiB)",
             row.status,
-            or_dash(&row.t_step_s),
+            or_dash(&row.step1_t_step_s),
             or_dash(&row.wall_time_s),
             or_dash(&row.peak_rss_mb),
         );
@@ -362,7 +385,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
         let pts: Vec<(f64, f64)> = done
             .iter()
             .filter(|r| label_of(r) == m)
-            .filter_map(|r| Some((r.vertices.parse().ok()?, r.t_step_s.parse().ok()?)))
+            .filter_map(|r| Some((r.vertices.parse().ok()?, r.step1_t_step_s.parse().ok()?)))
             .collect();
         let slope = loglog_slope(&pts);
         let label = match slope {

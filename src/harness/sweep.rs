@@ -733,7 +733,7 @@ fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> StaticRow {
         let mut row = StaticRow::of_case(&scene, &o);
         if let Some(r) = reference {
             row.reference_energy = Some(r.energy);
-            if r.status == "converged" {
+            if r.status == "converged" || r.status == "fixed_point" {
                 row.energy_error =
                     Some((o.res.energy - r.energy).abs() / r.energy.abs().max(f64::MIN_POSITIVE));
                 row.position_error_h1 = Some(h1_distance(&scene.mesh, &o.res.x, &r.x));

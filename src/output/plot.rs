@@ -5,8 +5,9 @@
 //! `--dashed Y` drawing reference curves dashed.
 //!
 //! `X` (and each `Y`) is a column name, `1/COL`, `max(COL,COL)` or `1/max(COL,COL)`. Only
-//! rows with `status = converged` are plotted unless `--all-statuses` is given; rows whose x or
-//! y is empty or not positive are skipped (log axes) and counted on stderr.
+//! rows of runs that stopped on the outer stopping rule (`status` `converged` or
+//! `fixed_point`) are plotted unless `--all-statuses` is given; rows whose x or y is empty or
+//! not positive are skipped (log axes) and counted on stderr.
 
 use crate::output::loglog::{loglog_slope, loglog_svg, Series};
 use crate::output::timeseries::{timeseries_svg, Line};
@@ -39,7 +40,7 @@ pub struct PlotArgs {
     /// No fitted slope in the legend (for fronts and scatter, where a power law means nothing).
     #[arg(long)]
     pub no_fit: bool,
-    /// Plot every row, not only the converged ones.
+    /// Plot every row, not only those of runs stopped by the stopping rule (converged, fixed_point).
     #[arg(long)]
     pub all_statuses: bool,
     /// Linear axes instead of log–log (values of any sign, no fitted slope): profiles such as
@@ -159,15 +160,20 @@ pub fn cmd_plot(a: &PlotArgs) -> Result<()> {
         col(c)?;
         filters.push((idx[c], v.to_string()));
     }
-    if !a.all_statuses {
+    let status = if a.all_statuses {
+        None
+    } else {
         col("status")?;
-        filters.push((idx["status"], "converged".into()));
-    }
+        Some(idx["status"])
+    };
     let mut series: BTreeMap<(String, usize), Vec<(f64, f64)>> = BTreeMap::new();
     let (mut used, mut skipped) = (0usize, 0usize);
     for rec in rdr.records() {
         let row: Vec<String> = rec?.iter().map(String::from).collect();
         if filters.iter().any(|(i, v)| &row[*i] != v) {
+            continue;
+        }
+        if status.is_some_and(|i| row[i] != "converged" && row[i] != "fixed_point") {
             continue;
         }
         let g = a
@@ -192,7 +198,7 @@ pub fn cmd_plot(a: &PlotArgs) -> Result<()> {
     }
     if used == 0 {
         bail!(
-            "{:?}: no plottable point (filters {:?}; only converged rows unless --all-statuses)",
+            "{:?}: no plottable point (filters {:?}; only converged and fixed_point rows unless --all-statuses)",
             a.csv,
             a.filters
         );

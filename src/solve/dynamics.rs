@@ -256,6 +256,13 @@ impl Objective for WithInertia<'_> {
         // The inertia term is a positive diagonal.
         self.energy.model_is_psd(model)
     }
+    fn term_gradients(&self, x: &[f64]) -> Vec<Vec<f64>> {
+        let mut gs = self.energy.term_gradients(x);
+        let mut g = vec![0.0; x.len()];
+        self.inertia.add_gradient(x, &mut g);
+        gs.push(g);
+        gs
+    }
 }
 
 /// The contact force of one pair at the end of a step: the sum of its rows' multipliers (QP

@@ -1,21 +1,28 @@
 //! The outer loop of §3: `φ_{k+1} = argmin { J(φ) : φ ∈ T(φ_k) }`, stopped when
-//! `|J(φ_{k+1}) − J(φ_k)| ≤ tol_J · max(1, |J(φ_k)|)` (docs/method.md).
+//! `|J(φ_{k+1}) − J(φ_k)| ≤ max(tol_J · E(φ_{k+1}), 64 u |J(φ_{k+1})|)` (docs/method.md, the
+//! stopping rule), with the energy scale of [`energy_scale`]. Where the rule stops the run,
+//! the minimality certificate ([`crate::solve::certificate`]) decides the status: `converged`
+//! when `κ ≤ tol_κ`, else `fixed_point` (or `line_search_failed` when the last sub-problem
+//! stalled in its line search). Every run ends with its certificate.
 //!
 //! The loop never prints: it emits one [`IterationRecord`] per outer step to an
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
 //! frames or a progress line.
 
-use crate::contact::broad_phase::point_edge_near;
+use crate::contact::motion::MotionSearch;
 use crate::contact::MinDistance;
 use crate::contact::{
-    all_movable_pairs, displacements, min_distance, near_pairs, pair_rows, rows_for, ContactPair,
-    PairRows,
+    all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
 };
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
+use crate::solve::certificate::{certificate, Certificate, CertificateError};
+use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::subproblem::row_offsets;
-use crate::solve::subproblem::{solve_subproblem, DofMap, InnerSettings, RowOracle, TrustBox};
+use crate::solve::subproblem::{
+    solve_subproblem, DofMap, InnerSettings, RowOracle, SubproblemResult, TrustBox,
+};
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -85,8 +92,22 @@ impl Default for TrustSettings {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OuterSettings {
-    /// Relative energy tolerance of the stopping rule.
+    /// Relative energy tolerance of the stopping rule (relative to the energy scale of
+    /// [`energy_scale`]).
     pub tol_j: f64,
+    /// Tolerance of the minimality certificate: a run that meets the stopping rule is
+    /// `converged` when `κ ≤ tol_kappa`, else `fixed_point`. The presets use `√tol_J`
+    /// (docs/method.md).
+    pub tol_kappa: f64,
+    /// The backend's tolerance (`eps_abs`): with the row margin δ it sets the certificate's
+    /// distance tolerance ([`certificate_active_tol`]).
+    pub qp_tol: f64,
+    /// Hand the sub-problems' QPs to the backend in the run's own units (energy scale, reference
+    /// diameter; [`crate::solve::qp_units`]), so that the backends' absolute tolerances do not
+    /// depend on the scene's units. Off by default: it changes the QPs every backend sees, and
+    /// with QPs solved to a relative accuracy the creeping runs creep longer
+    /// (docs/known-gaps.md).
+    pub qp_in_run_units: bool,
     /// Maximum number of outer steps.
     pub max_outer: usize,
     /// Which pairs the sub-problems carry.
@@ -105,18 +126,26 @@ pub struct OuterSettings {
     /// overshoot by one QP solve. On expiry the run stops with [`RunStatus::TimeLimit`] and
     /// returns its last accepted (admissible) iterate.
     pub time_limit_s: Option<f64>,
+    /// After convergence, solve the last sub-problem again with its rows at ε itself (no
+    /// margin δ), so that the reported state and energy are those of rows at ε, not ε + δ
+    /// (docs/method.md, "The row margin"). Not an outer step: `history.csv` ends before it.
+    pub polish: bool,
 }
 
 impl Default for OuterSettings {
     fn default() -> Self {
         OuterSettings {
             tol_j: 1e-10,
+            tol_kappa: 1e-5,
+            qp_tol: 1e-9,
+            qp_in_run_units: false,
             max_outer: 2000,
             pruning: Pruning::Lazy,
             lazy_start: 0.25,
             trust: TrustSettings::default(),
             inner: InnerSettings::default(),
             time_limit_s: None,
+            polish: true,
         }
     }
 }
@@ -125,8 +154,11 @@ impl Default for OuterSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunStatus {
-    /// The stopping rule was met.
+    /// The stopping rule was met and the minimality certificate holds (`κ ≤ tol_kappa`).
     Converged,
+    /// The stopping rule was met at a point whose certificate does not hold (`κ > tol_kappa`):
+    /// a fixed point of the outer map that is not a KKT point of problem (3).
+    FixedPoint,
     /// `max_outer` steps without meeting the stopping rule.
     MaxOuterIterations,
     /// A sub-problem's QP did not solve (its status is in the record).
@@ -146,6 +178,7 @@ impl RunStatus {
     pub fn as_str(&self) -> &'static str {
         match self {
             RunStatus::Converged => "converged",
+            RunStatus::FixedPoint => "fixed_point",
             RunStatus::MaxOuterIterations => "max_outer_iterations",
             RunStatus::SubproblemFailed => "subproblem_failed",
             RunStatus::LineSearchFailed => "line_search_failed",
@@ -183,6 +216,9 @@ pub struct IterationRecord {
     pub backend_iterations: usize,
     /// Last QP status of this outer step.
     pub qp_status: &'static str,
+    /// The energy scale `E(φ_k)` of the stopping rule ([`energy_scale`]; NaN at iteration
+    /// 0).
+    pub energy_scale: f64,
     /// Seconds in pair search and row building.
     pub t_pairs_s: f64,
     /// Seconds assembling gradients, Hessians and QP matrices.
@@ -216,6 +252,12 @@ pub enum RunError {
     /// The time limit is not > 0.
     #[error("time limit must be > 0 seconds, got {0}")]
     BadTimeLimit(f64),
+    /// The H¹ norm of the mesh (for the stopping rule and the certificate) cannot be built.
+    #[error("{0}")]
+    H1(#[from] H1Error),
+    /// The certificate could not be computed (a bug: the point is admissible).
+    #[error("minimality certificate: {0}")]
+    Certificate(#[from] CertificateError),
 }
 
 /// Final state of a run.
@@ -239,8 +281,25 @@ pub struct RunResult {
     pub last_rows: Vec<PairRows>,
     /// Multipliers of the last sub-problem (`μ ≥ 0`, one per row of each pair).
     pub multipliers: Vec<[f64; 4]>,
-    /// Wall time of the whole loop.
+    /// The minimality certificate at φ (computed once, at the end, whatever the status).
+    pub certificate: Certificate,
+    /// Wall time of the whole loop (the certificate included).
     pub wall_time_s: f64,
+    /// The final polish at ε ([`OuterSettings::polish`]), when it ran.
+    pub polish: Option<Polish>,
+    /// The ψ of the last sub-problem (the rows of `last_rows` are those of T(ψ)).
+    pub psi: Vec<f64>,
+}
+
+/// The outcome of the final polish at ε (docs/method.md, "The row margin").
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Polish {
+    /// J after the polish minus J before (≤ 0; 0 when not accepted).
+    pub energy_change: f64,
+    /// Its inner steps (also counted in the run's total).
+    pub inner_iterations: usize,
+    /// Whether its iterate was kept: admissible, its QPs solved, J not raised.
+    pub accepted: bool,
 }
 
 /// Round-off allowance of the exact admissibility check: `16 u · max(1, max |x_i|)`, `u` the
@@ -250,6 +309,28 @@ pub struct RunResult {
 /// row exactly at ε and the kernel returned ε − 2.3e-17.
 pub fn roundoff_allowance(x: &[f64]) -> f64 {
     16.0 * f64::EPSILON * x.iter().fold(1.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The energy scale `E(x) = S·ℓ` of the stopping rule (docs/method.md, the stopping rule):
+/// `S = max(‖J'(x)‖_{H⁻¹}, max_t ‖J_t'(x)‖_{H⁻¹})`, the largest force of the balance at `x`
+/// (the net force on the free dofs, each term's force with its reactions at the fixed
+/// vertices; [`crate::solve::certificate::forces`]), in the unit-free norm of
+/// [`crate::solve::h1::H1Norm::scaled`], and `ℓ` the diameter of the reference positions: the work of that
+/// force over the size of the scene. It scales with the energy unit, does not depend on the
+/// length unit or on an additive constant in J (which `|J|` does: `−C ln V` shifts with the
+/// unit of area), and does not vanish at a minimum without contact.
+pub fn energy_scale(energy: &dyn Objective, x: &[f64], norms: &H1Norms) -> f64 {
+    let (gnorm, term_force, _, _) = crate::solve::certificate::forces(energy, x, norms);
+    gnorm.max(term_force) * norms.free.ell
+}
+
+/// The distance tolerance of the certificate: a pair is at distance ε when its distance is at
+/// most `ε + 2δ + qp_tol·ℓ`, `δ = margin_rel·ε + margin_abs` the sub-problems' row margin (the
+/// rows are imposed at `ε + δ`) and `qp_tol·ℓ` what a backend's feasibility tolerance leaves
+/// on a row of length scale `ℓ` (the reference diameter).
+pub fn certificate_active_tol(settings: &OuterSettings, eps: f64, ell: f64) -> f64 {
+    let delta = settings.inner.margin_rel * eps + settings.inner.margin_abs;
+    2.0 * delta + settings.qp_tol * ell
 }
 
 /// Median length of the contact edges at `x`: the `h̄` of [`TrustSettings`] and of
@@ -274,44 +355,25 @@ pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
     *l.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
-/// The lazy-row oracle at ψ (see [`RowOracle`]): a row `n·(φ(p) − φ(q))` of T(ψ) moves by at
-/// most `D_p + D_q` from its value at ψ, which is at least the pair's distance at ψ, with
-/// `D_v = |φ(v) − ψ(v)|`. In 2D (point–edge rows) only pairs closer than
-/// `ε + δ + D_x + max(D_a0, D_a1)` at ψ can be violated by φ, and the broad phase finds exactly
-/// those (per-vertex and per-edge radii); in 3D the radius is uniform,
-/// `ε + δ + 2 max_v D_v`. The rows below `ε + δ` at φ are returned.
+/// The lazy-row oracle at ψ (see [`RowOracle`]): the rows of T(ψ) below `ε + δ` at φ that are
+/// not carried yet, found by relative displacement ([`MotionSearch`]: a pair can only be
+/// violated when its elements' relative motion since ψ can close its gap at ψ; the trees at ψ
+/// are built at the first call and reused for the whole outer step). Of those, per point (or
+/// first edge) only the most violated pair is returned.
 fn lazy_oracle<'a>(
     mesh: &'a Mesh,
     psi: &'a [f64],
     eps_qp: f64,
 ) -> impl FnMut(&[f64], &[PairRows]) -> Vec<PairRows> + 'a {
     let mut carried: HashSet<ContactPair> = HashSet::new();
+    let mut search: Option<Search> = None;
     move |phi: &[f64], rows: &[PairRows]| {
         if carried.len() != rows.len() {
             carried = rows.iter().map(|r| r.pair).collect();
         }
-        let disp = displacements(mesh.dim, psi, phi);
-        let candidates: Vec<ContactPair> = if mesh.dim == 2 {
-            let rv: Vec<f64> = disp.iter().map(|d| d * (1.0 + 1e-12) + eps_qp).collect();
-            let re: Vec<f64> = mesh
-                .edges
-                .iter()
-                .map(|e| disp[e[0]].max(disp[e[1]]) * (1.0 + 1e-12))
-                .collect();
-            point_edge_near(mesh, psi, &rv, &re, true)
-                .into_iter()
-                .map(|p| p.pair.into())
-                .collect()
-        } else {
-            let dmax = disp.iter().fold(0.0f64, |m, &d| m.max(d));
-            near_pairs(mesh, psi, eps_qp + 2.0 * dmax * (1.0 + 1e-12), true)
-        };
-        let violated: Vec<PairRows> = candidates
-            .par_iter()
-            .filter(|p| !carried.contains(p))
-            .filter_map(|&p| pair_rows(mesh, psi, p))
-            .filter(|r| r.min_value(phi) < eps_qp)
-            .collect();
+        let search = search.get_or_insert_with(|| Search::new(mesh, psi));
+        let mut violated = search.violated(mesh, psi, phi, eps_qp);
+        violated.retain(|r| !carried.contains(&r.pair));
         // Per point (or first edge), only the most violated pair: the QP solved again with
         // these moves the point, and the oracle is asked again about the next point found.
         let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
@@ -331,6 +393,184 @@ fn lazy_oracle<'a>(
         let added: Vec<PairRows> = pick.into_iter().map(|i| violated[i]).collect();
         carried.extend(added.iter().map(|r| r.pair));
         added
+    }
+}
+
+/// [`MotionSearch`] in the mesh's dimension.
+enum Search {
+    Two(MotionSearch<2>),
+    Three(MotionSearch<3>),
+}
+
+impl Search {
+    fn new(mesh: &Mesh, psi: &[f64]) -> Search {
+        if mesh.dim == 2 {
+            Search::Two(MotionSearch::new(mesh, psi))
+        } else {
+            Search::Three(MotionSearch::new(mesh, psi))
+        }
+    }
+
+    fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
+        match self {
+            Search::Two(s) => s.violated(mesh, psi, phi, eps_qp),
+            Search::Three(s) => s.violated(mesh, psi, phi, eps_qp),
+        }
+    }
+}
+
+/// What every outer step of one run shares.
+struct StepContext<'a> {
+    mesh: &'a Mesh,
+    energy: &'a dyn Objective,
+    eps: f64,
+    dofs: &'a DofMap,
+    settings: &'a OuterSettings,
+    /// The all-pairs mode's pairs (empty otherwise).
+    all_pairs: &'a [ContactPair],
+    /// Median contact edge length at φ_0.
+    hbar: f64,
+    roundoff: f64,
+    deadline: Option<Instant>,
+    /// The H¹ norms of the stopping rule's energy scale.
+    norms: &'a H1Norms,
+}
+
+/// One outer step: its sub-problem, its record, the exact minimum distance of its iterate, and
+/// whether the trust box bound it.
+struct Step {
+    sub: SubproblemResult,
+    record: IterationRecord,
+    min_distance: MinDistance,
+    box_active: bool,
+    /// The energy scale at the step's iterate ([`energy_scale`]).
+    energy_scale: f64,
+}
+
+impl StepContext<'_> {
+    /// The step `k` from ψ = `x`: the sub-problem min J over T(ψ) with rows at `ε + margin`
+    /// from the inner start `start` (ψ itself, or a point of T(ψ) for the polish; `delta`: the
+    /// trust half-width; `d_prev`: the last step's largest displacement; `warm`: the last
+    /// multipliers by pair), checked exactly.
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &self,
+        x: &[f64],
+        start: &[f64],
+        k: usize,
+        margin: f64,
+        delta: f64,
+        d_prev: f64,
+        e_scale: f64,
+        warm: &HashMap<ContactPair, [f64; 4]>,
+        backend: &mut dyn QpBackend,
+    ) -> Result<Step, RunError> {
+        let (mesh, eps, settings) = (self.mesh, self.eps, self.settings);
+        let eps_qp = eps + margin;
+        // Inside the box |φ − ψ|∞ ≤ δ a vertex moves by at most √d·δ, a row by twice that.
+        let box_reach = if mesh.dim == 2 {
+            2.0 * std::f64::consts::SQRT_2
+        } else {
+            2.0 * 3f64.sqrt()
+        };
+        let tp = Instant::now();
+        // The pairs given rows up front (the all-fixed pairs are constant: checked once at the
+        // start, never given rows).
+        let pairs: Vec<ContactPair> = match settings.pruning {
+            Pruning::AllPairs => self.all_pairs.to_vec(),
+            // Start from the pairs that the last step's displacement could reach, within
+            // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
+            Pruning::Lazy => {
+                let r = eps_qp + d_prev.min(settings.lazy_start * self.hbar);
+                near_pairs(mesh, x, r, true)
+            }
+            // Inside the box a row moves by at most 2√d·δ: farther pairs cannot be violated.
+            Pruning::TrustRegion => {
+                let r = eps_qp + box_reach * delta * (1.0 + 1e-9);
+                near_pairs(mesh, x, r, true)
+            }
+        };
+        let rows0 = rows_for(mesh, x, &pairs).expect("admissible ψ has positive distances");
+        let t_pairs_s = tp.elapsed().as_secs_f64();
+        let trust =
+            (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: x, delta });
+        let mut oracle = lazy_oracle(mesh, x, eps_qp);
+        let mut inner = settings.inner.clone();
+        // The sub-problem's rows are at ε + margin_rel·ε + margin_abs.
+        if margin == 0.0 {
+            inner.margin_rel = 0.0;
+            inner.margin_abs = 0.0;
+        }
+        inner.energy_scale = Some(e_scale);
+        inner.length_scale = settings.qp_in_run_units.then_some(self.norms.free.ell);
+        let sub = solve_subproblem(
+            mesh,
+            self.energy,
+            self.dofs,
+            rows0,
+            start,
+            eps,
+            trust,
+            (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
+            Some(warm),
+            backend,
+            &inner,
+            self.deadline,
+        )?;
+        let box_active = trust.is_some_and(|tb| {
+            let dmax = x
+                .iter()
+                .zip(&sub.y)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            dmax >= (1.0 - 1e-3) * tb.delta
+        });
+        drop(oracle);
+        let tc = Instant::now();
+        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
+        let t_check = tc.elapsed().as_secs_f64();
+        let e_new = energy_scale(self.energy, &sub.y, self.norms);
+        // Active: within twice the run's margin of ε (the same count with or without it).
+        let act = 2.0 * (settings.inner.margin_rel * eps + settings.inner.margin_abs);
+        let active_rows = sub
+            .rows
+            .par_iter()
+            .map(|r| {
+                r.values(&sub.y)
+                    .iter()
+                    .take(r.len)
+                    .filter(|&&v| v - eps <= act)
+                    .count()
+            })
+            .sum();
+        let record = IterationRecord {
+            iteration: k,
+            energy: sub.energy,
+            min_distance: md.distance,
+            admissible: md.distance >= eps - self.roundoff,
+            pairs: sub.rows.len(),
+            rows: row_offsets(&sub.rows).1,
+            active_rows,
+            lazy_rounds: sub.lazy_rounds,
+            trust_delta: if settings.pruning == Pruning::TrustRegion {
+                delta
+            } else {
+                0.0
+            },
+            inner_iterations: sub.inner_iterations,
+            backend_iterations: sub.backend_iterations,
+            qp_status: sub.qp_status.as_str(),
+            energy_scale: e_new,
+            t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
+            t_assembly_s: sub.t_assembly_s,
+            t_solve_s: sub.t_solve_s,
+        };
+        Ok(Step {
+            sub,
+            record,
+            min_distance: md,
+            box_active,
+            energy_scale: e_new,
+        })
     }
 }
 
@@ -434,6 +674,8 @@ pub fn run_observed(
     if !jx.is_finite() {
         return Err(RunError::BadInitialEnergy(jx));
     }
+    let norms = H1Norms::scaled(mesh)?;
+    let mut e_scale = energy_scale(energy, &x, &norms);
     let hbar = median_edge_length(mesh, x0);
     let roundoff = roundoff_allowance(x0);
     let mut delta = settings.trust.delta0 * hbar;
@@ -454,6 +696,7 @@ pub fn run_observed(
             inner_iterations: 0,
             backend_iterations: 0,
             qp_status: "none",
+            energy_scale: e_scale,
             t_pairs_s: t_pairs0,
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
@@ -472,113 +715,53 @@ pub fn run_observed(
         min_distance: md0,
         last_rows: Vec::new(),
         multipliers: Vec::new(),
+        certificate: Certificate::default(),
         wall_time_s: 0.0,
+        polish: None,
+        psi: Vec::new(),
     };
+    // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
+    // last sub-problem stalled in its line search.
+    let mut stopped_by_rule = false;
+    let mut stalled = false;
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
-    let eps_qp = eps + margin;
     // The last sub-problem's multipliers by pair: the next step's warm start.
     let mut last_mult: HashMap<ContactPair, [f64; 4]> = HashMap::new();
-    // Inside the box |φ − ψ|∞ ≤ δ a vertex moves by at most √d·δ, a row by twice that.
-    let box_reach = if mesh.dim == 2 {
-        2.0 * std::f64::consts::SQRT_2
-    } else {
-        2.0 * 3f64.sqrt()
+    let ctx = StepContext {
+        mesh,
+        energy,
+        eps,
+        dofs: &dofs,
+        settings,
+        all_pairs: &all_pairs,
+        hbar,
+        roundoff,
+        deadline,
+        norms: &norms,
     };
+    // The ψ of the last accepted step.
+    let mut psi = x.clone();
     for k in 1..=settings.max_outer {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             result.status = RunStatus::TimeLimit;
             break;
         }
-        let tp = Instant::now();
-        // The pairs given rows up front (the all-fixed pairs are constant: checked once above,
-        // never given rows).
-        let pairs: Vec<ContactPair> = match settings.pruning {
-            Pruning::AllPairs => all_pairs.clone(),
-            // Start from the pairs that the last step's displacement could reach, within
-            // `lazy_start·h̄`; the oracle adds whatever else a QP solution violates.
-            Pruning::Lazy => {
-                let r = eps_qp + d_prev.min(settings.lazy_start * hbar);
-                near_pairs(mesh, &x, r, true)
-            }
-            // Inside the box a row moves by at most 2√d·δ: farther pairs cannot be violated.
-            Pruning::TrustRegion => {
-                let r = eps_qp + box_reach * delta * (1.0 + 1e-9);
-                near_pairs(mesh, &x, r, true)
-            }
-        };
-        let rows0 = rows_for(mesh, &x, &pairs).expect("admissible ψ has positive distances");
-        let t_pairs_s = tp.elapsed().as_secs_f64();
-        let trust =
-            (settings.pruning == Pruning::TrustRegion).then_some(TrustBox { psi: &x, delta });
-        let mut oracle = lazy_oracle(mesh, &x, eps_qp);
-        let sub = solve_subproblem(
-            mesh,
-            energy,
-            &dofs,
-            rows0,
-            &x,
-            eps,
-            trust,
-            (settings.pruning == Pruning::Lazy).then_some(&mut oracle as RowOracle),
-            Some(&last_mult),
-            backend,
-            &settings.inner,
-            deadline,
+        let step = ctx.step(
+            &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
         )?;
-        let box_active = trust.is_some_and(|tb| {
-            let dmax = x
-                .iter()
-                .zip(&sub.y)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            dmax >= (1.0 - 1e-3) * tb.delta
-        });
-        drop(oracle);
+        let sub = step.sub;
         result.outer_iterations = k;
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
-        let tc = Instant::now();
-        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
-        let t_check = tc.elapsed().as_secs_f64();
-        let active_rows = sub
-            .rows
-            .par_iter()
-            .map(|r| {
-                r.values(&sub.y)
-                    .iter()
-                    .take(r.len)
-                    .filter(|&&v| v - eps <= 2.0 * margin)
-                    .count()
-            })
-            .sum();
         observer.iteration(&OuterEvent {
-            record: &IterationRecord {
-                iteration: k,
-                energy: sub.energy,
-                min_distance: md.distance,
-                admissible: md.distance >= eps - roundoff,
-                pairs: sub.rows.len(),
-                rows: row_offsets(&sub.rows).1,
-                active_rows,
-                lazy_rounds: sub.lazy_rounds,
-                trust_delta: if settings.pruning == Pruning::TrustRegion {
-                    delta
-                } else {
-                    0.0
-                },
-                inner_iterations: sub.inner_iterations,
-                backend_iterations: sub.backend_iterations,
-                qp_status: sub.qp_status.as_str(),
-                t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
-                t_assembly_s: sub.t_assembly_s,
-                t_solve_s: sub.t_solve_s,
-            },
+            record: &step.record,
             x: &sub.y,
             rows: &sub.rows,
             multipliers: &sub.multipliers,
         });
-        if md.distance < eps - roundoff {
+        if !step.record.admissible {
             result.status = RunStatus::Inadmissible;
-            result.min_distance = md;
+            result.min_distance = step.min_distance;
             break;
         }
         if sub.energy > jx {
@@ -590,10 +773,11 @@ pub fn run_observed(
             .into_iter()
             .fold(0.0, f64::max)
             .max(1e-3 * hbar);
-        x = sub.y;
+        psi = std::mem::replace(&mut x, sub.y);
         jx = sub.energy;
+        e_scale = step.energy_scale;
         result.energy = jx;
-        result.min_distance = md;
+        result.min_distance = step.min_distance;
         last_mult = sub
             .rows
             .iter()
@@ -617,17 +801,70 @@ pub fn run_observed(
         if settings.pruning == Pruning::TrustRegion {
             // Grow δ while the box binds; shrink it when the step stays well inside.
             let t = &settings.trust;
-            if box_active {
+            if step.box_active {
                 delta = (2.0 * delta).min(t.delta_max * hbar);
             } else if d_prev < 0.25 * delta {
                 delta = (0.5 * delta).max(t.delta_min * hbar);
             }
         }
-        // With a binding box the step is not argmin over T(ψ): do not stop on it.
-        if !box_active && (jprev - jx).abs() <= settings.tol_j * jprev.abs().max(1.0) {
-            result.status = RunStatus::Converged;
+        // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
+        // 64u|J| an energy difference is round-off.
+        let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+        if !step.box_active && (jprev - jx).abs() <= tol {
+            stopped_by_rule = true;
+            stalled = sub.line_search_stalled;
             break;
         }
+    }
+    // The polish (docs/method.md, "The row margin"): where the stopping rule stopped the run,
+    // the last sub-problem, min J over T(ψ) of the last ψ, is solved again from the final
+    // state with its rows at ε itself, so that the reported state and energy carry no bias
+    // from the margin δ. Kept only if admissible, solved, and not above J.
+    if settings.polish && stopped_by_rule {
+        let k = result.outer_iterations;
+        let step = ctx.step(
+            &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+        )?;
+        let sub = step.sub;
+        result.inner_iterations += sub.inner_iterations;
+        result.backend_iterations += sub.backend_iterations;
+        let accepted = step.record.admissible
+            && sub.energy <= jx
+            && sub.qp_status == QpStatus::Solved
+            && !sub.line_search_failed
+            && !sub.timed_out;
+        result.polish = Some(Polish {
+            energy_change: if accepted { sub.energy - jx } else { 0.0 },
+            inner_iterations: sub.inner_iterations,
+            accepted,
+        });
+        if accepted {
+            x = sub.y;
+            result.energy = sub.energy;
+            result.min_distance = step.min_distance;
+            result.last_rows = sub.rows;
+            result.multipliers = sub.multipliers;
+        }
+    }
+    result.psi = psi;
+    // The certificate at the returned point, with the last sub-problem's multipliers (summed
+    // per pair) as the warm start of its active set.
+    let warm: HashMap<ContactPair, f64> = result
+        .last_rows
+        .iter()
+        .zip(&result.multipliers)
+        .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+        .collect();
+    let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+    result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
+    if stopped_by_rule {
+        result.status = if result.certificate.kappa <= settings.tol_kappa {
+            RunStatus::Converged
+        } else if stalled {
+            RunStatus::LineSearchFailed
+        } else {
+            RunStatus::FixedPoint
+        };
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();

@@ -3,11 +3,14 @@
 //! outer stopping rule (docs/method.md): a QP tolerance near 1e-8 leaves constraint violations
 //! as large as a 1e-10 energy change, so `high` goes to 1e-11 with Clarabel.
 //!
-//! | preset  | tol_J  |
-//! |---------|--------|
-//! | low     | 1e-6   |
-//! | default | 1e-10  |
-//! | high    | 1e-12  |
+//! | preset  | tol_J  | tol_κ = √tol_J |
+//! |---------|--------|----------------|
+//! | low     | 1e-6   | 1e-3           |
+//! | default | 1e-10  | 1e-5           |
+//! | high    | 1e-12  | 1e-6           |
+//!
+//! `tol_κ` is the minimality certificate's tolerance ([`tol_kappa`]): a run that meets the
+//! stopping rule is `converged` when `κ ≤ tol_κ` (docs/method.md).
 //!
 //! [`RunSettings`] holds everything a run is configured by; the command line (`contactlab
 //! run`), a scene file's `[solver]` and a sweep file's blocks all fill it, and its one
@@ -83,6 +86,14 @@ impl Accuracy {
             ..default_settings(backend)
         }
     }
+}
+
+/// The certificate's tolerance for a stopping tolerance `tol_j`: `√tol_J`. Near a minimum the
+/// energy is quadratic in the position error e and the unbalanced force linear in it, so
+/// stopping when the energy changes by `tol_J` of its scale leaves a force of order
+/// `√tol_J` of the forces' scale (docs/method.md, "The minimality certificate").
+pub fn tol_kappa(tol_j: f64) -> f64 {
+    tol_j.sqrt()
 }
 
 /// Everything a run (static, or each step of a dynamic one) is configured by, with the
@@ -238,6 +249,8 @@ impl RunSettings {
     pub fn outer_settings(&self) -> OuterSettings {
         let mut settings = OuterSettings {
             tol_j: self.tol_j(),
+            tol_kappa: tol_kappa(self.tol_j()),
+            qp_tol: self.qp_settings().eps_abs,
             max_outer: self.max_outer,
             pruning: self.pruning,
             lazy_start: self.lazy_start,

@@ -25,6 +25,7 @@
 use crate::contact::{ContactPair, PairRows};
 use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
+use crate::solve::qp_units::solve_in_units;
 use contactlab_solvers::linalg::{LdlSymbolic, SparseLdl};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
@@ -36,7 +37,9 @@ use std::time::Instant;
 pub struct InnerSettings {
     /// Maximum Newton-type steps per T(ψ).
     pub max_inner: usize,
-    /// Stop the inner loop when `J(y) − J(y_new) ≤ tol_inner · max(1, |J|)`.
+    /// Stop the inner loop when `J(y) − J(y_new) ≤ tol_inner · E`, `E` the
+    /// [`InnerSettings::energy_scale`] (or `max(1, |J|)` without one), and not below the
+    /// round-off of J, `64 u |J|`.
     pub tol_inner: f64,
     /// Absolute floor of the proximal weight ρ.
     pub rho_abs: f64,
@@ -54,6 +57,18 @@ pub struct InnerSettings {
     pub warm_start: bool,
     /// The Hessian of the quadratic model ([`HessianModel`]; [`ModelShift`] for `shifted`).
     pub hessian_model: HessianModel,
+    /// The energy scale `E` of the run, set by the outer loop for each step (its stopping
+    /// rule's scale, docs/method.md): the inner stopping test and the round-off test of a
+    /// failed line search are relative to it, so that they do not depend on the units.
+    /// `None`: `max(1, |J|)`.
+    #[serde(skip)]
+    pub energy_scale: Option<f64>,
+    /// The length scale of the run (the reference diameter), set by the outer loop when its
+    /// `qp_in_run_units` is on. With both scales the QPs go to the backend in those units
+    /// ([`crate::solve::qp_units`]), so that the backend's absolute tolerances do not depend on
+    /// the scene's units. `None`: the QPs as built.
+    #[serde(skip)]
+    pub length_scale: Option<f64>,
 }
 
 impl Default for InnerSettings {
@@ -68,6 +83,8 @@ impl Default for InnerSettings {
             max_halvings: 40,
             warm_start: true,
             hessian_model: HessianModel::default(),
+            energy_scale: None,
+            length_scale: None,
         }
     }
 }
@@ -170,8 +187,13 @@ pub struct SubproblemResult {
     pub backend_iterations: usize,
     /// Status of the last QP solve.
     pub qp_status: QpStatus,
-    /// The line search could not decrease J along the last direction.
+    /// The line search could not decrease J along the last direction, whose slope was above
+    /// round-off.
     pub line_search_failed: bool,
+    /// The line search could not decrease J along a direction whose slope was at round-off
+    /// (`|slope| ≤ max(1e-12·E, 64u|J|)`): the sub-problem stopped there, which is not a proof that it
+    /// is solved (the outer loop classifies such a stop with the certificate).
+    pub line_search_stalled: bool,
     /// The rows the last QP carried (the given ones, then those a [`RowOracle`] added).
     pub rows: Vec<PairRows>,
     /// Contact multipliers of the last QP, one per row of each pair (`μ = −y_QP ≥ 0`; entries
@@ -408,6 +430,7 @@ pub fn solve_subproblem(
         backend_iterations: 0,
         qp_status: QpStatus::Solved,
         line_search_failed: false,
+        line_search_stalled: false,
         rows: Vec::new(),
         multipliers: Vec::new(),
         lazy_rounds: 0,
@@ -455,7 +478,10 @@ pub fn solve_subproblem(
                 });
             }
             let t1 = Instant::now();
-            let sol = backend.solve(&qp, warm.as_ref())?;
+            let sol = match (settings.energy_scale, settings.length_scale) {
+                (Some(e), Some(l)) => solve_in_units(backend, &qp, warm.as_ref(), e, l)?,
+                _ => backend.solve(&qp, warm.as_ref())?,
+            };
             res.t_solve_s += t1.elapsed().as_secs_f64();
             res.backend_iterations += sol.iterations;
             res.qp_status = sol.status;
@@ -504,7 +530,24 @@ pub fn solve_subproblem(
             } else {
                 // y and y + d both lie in T(ψ) (the oracle checked y + d against all of it),
                 // so the segment does; the line search still checks the carried rows exactly.
-                let mut t = 1.0;
+                // Where the rows carry no margin (the polish at ε), the backend's tolerance can
+                // leave rows of the full step just below ε: the step is then cut where the
+                // first of them reaches ε (rows are linear in the step length).
+                let mut t: f64 = 1.0;
+                if eps_qp == eps {
+                    let full: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + b).collect();
+                    for r in &rows {
+                        let (v0, v1) = (r.values(&y), r.values(&full));
+                        for i in 0..r.len {
+                            if v1[i] < eps && v0[i] > v1[i] {
+                                // a millionth of the slack left, above the round-off of the
+                                // row values, so that the exact check below passes
+                                t = t.min((v0[i] - eps) * (1.0 - 1e-6) / (v0[i] - v1[i]));
+                            }
+                        }
+                    }
+                    t = t.max(0.0);
+                }
                 let mut accepted = None;
                 for _ in 0..=settings.max_halvings {
                     let trial: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + t * b).collect();
@@ -581,13 +624,18 @@ pub fn solve_subproblem(
                     x: vec![0.0; qp.n()],
                     y: ysol,
                 });
-                if dec <= settings.tol_inner * jy.abs().max(1.0) {
+                let scale = settings.energy_scale.unwrap_or(jy.abs().max(1.0));
+                if dec <= (settings.tol_inner * scale).max(64.0 * f64::EPSILON * jy.abs()) {
                     break;
                 }
             }
             Step::Failed(slope) => {
-                // A predicted decrease at round-off level is convergence, not a failure.
-                res.line_search_failed = -slope > 1e-12 * jy.abs().max(1.0);
+                // A predicted decrease at round-off level is a stall, not a failure; whether
+                // the point is optimal is for the certificate to say.
+                let scale = settings.energy_scale.unwrap_or(jy.abs().max(1.0));
+                res.line_search_stalled =
+                    -slope <= (1e-12 * scale).max(64.0 * f64::EPSILON * jy.abs());
+                res.line_search_failed = !res.line_search_stalled;
                 break;
             }
         }

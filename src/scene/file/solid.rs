@@ -4,21 +4,18 @@
 
 use super::schema::MaterialSpec;
 use super::{Ctx, Loaded, SceneFileError};
-use crate::energy::{
-    Elasticity, Energy, LinearElastic2d, LinearElastic3d, NeoHookean2d, NeoHookean3d,
-    NeoHookeanPlaneStress2d, Plane,
-};
+use crate::energy::{Elasticity, Plane};
+use crate::scene::physics::Material;
 
 impl Ctx<'_> {
-    /// A solid's elastic term from its `material`.
+    /// A solid's material, checked: the model (`neo-hookean`, `linear-elastic`), its
+    /// constants and, in 2D, plane strain or stress.
     pub(super) fn solid_material(
         &self,
         dim: usize,
         l: &Loaded,
         m: &MaterialSpec,
-        els: &[[usize; 4]],
-        x_ref: &[f64],
-    ) -> Result<Box<dyn Energy>, SceneFileError> {
+    ) -> Result<Material, SceneFileError> {
         let line = l.line;
         let mk = format!("{}.material", l.key);
         let linear = match m.model.as_str() {
@@ -57,22 +54,11 @@ impl Ctx<'_> {
                 ))
             }
         };
-        let tris = || els.iter().map(|e| [e[0], e[1], e[2]]).collect::<Vec<_>>();
-        let tet_error = |e: crate::energy::DegenerateTet| {
-            self.invalid(line, l.key.clone(), format!("{:?}", l.name), e.to_string())
-        };
-        Ok(match (linear, dim, plane) {
-            (false, 2, Plane::Strain) => Box::new(NeoHookean2d::new(tris(), x_ref, c.mu, c.lambda)),
-            (false, 2, Plane::Stress) => {
-                Box::new(NeoHookeanPlaneStress2d::new(tris(), x_ref, c.mu, c.lambda))
-            }
-            (false, _, _) => {
-                Box::new(NeoHookean3d::new(els.to_vec(), x_ref, c.mu, c.lambda).map_err(tet_error)?)
-            }
-            (true, 2, p) => Box::new(LinearElastic2d::new(tris(), x_ref, c.mu, c.lambda, p)),
-            (true, _, _) => Box::new(
-                LinearElastic3d::new(els.to_vec(), x_ref, c.mu, c.lambda).map_err(tet_error)?,
-            ),
+        let (mu, lambda) = (c.mu, c.lambda);
+        Ok(match (linear, plane) {
+            (true, plane) => Material::LinearElastic { mu, lambda, plane },
+            (false, Plane::Strain) => Material::NeoHookean { mu, lambda },
+            (false, Plane::Stress) => Material::NeoHookeanPlaneStress { mu, lambda },
         })
     }
 

@@ -1,0 +1,956 @@
+//! The minimality certificate κ: whether a configuration φ_h is a KKT point of problem (3)
+//! itself, with its true non-linear constraints `dist(φ(T1), φ(T2)) ≥ ε` (Lemma 5.1 in 2D,
+//! Lemma 5.3 in 3D), and not only a fixed point of the outer map (Lemma 5.4)
+//! (docs/method.md, "The minimality certificate").
+//!
+//! ```text
+//!     κ = min_{μ ≥ 0} ‖J'(φ_h) − Σ_k μ_k ∇d_k‖_{H⁻¹} / S,
+//!     S = max(‖J'(φ_h)‖_{H⁻¹}, max_t ‖J_t'(φ_h)‖_{H⁻¹})
+//! ```
+//!
+//! * `d_k` is the distance of a pair `k` of disjoint contact elements whose distance is
+//!   within `active_tol` of ε, and `∇d_k` its gradient on the free dofs. With `n` the unit
+//!   vector from the closest point of the first element to that of the second and the
+//!   closest points' barycentric weights (eq. 8, 12, 13):
+//!   - `point_edge` (2D): `−n` at x, `α_i n` at a_i;
+//!   - `point_triangle`: `−n` at x, `β_i n` at t_i;
+//!   - `edge_edge`: `−(1 − s, s)_i n` at a_i, `(1 − t, t)_j n` at b_j. When the edges are
+//!     parallel the closest pair is not unique (eq. 12's `P_{a,b}`) and the distance is not
+//!     differentiable; the extreme points of its subdifferential are the gradients of the
+//!     distances from the edges' endpoints to the other edge, which are constraints of
+//!     `A_{h,ε}` themselves (a vertex and an edge it does not belong to). Those within the
+//!     tolerance are generators too.
+//!
+//!   This is `Σ_i w_i ∇row_i` over the pair's rows of T(φ_h) (rows built at φ_h itself) with
+//!   their weights `w_i`: the gradient of Lemma 5.6's residual.
+//! * `‖·‖_{H⁻¹}` is the dual norm of the H¹ Gram matrix on the reference mesh scaled to unit
+//!   diameter ([`H1Norm::scaled`]): the numerator over the free dofs (the KKT conditions are
+//!   on the free dofs), each term's force `J_t'` over all dofs (with the reactions at the
+//!   fixed vertices).
+//! * The scale `S`: with contact, `J'(φ_h)` is the force the contacts hold; at a minimum
+//!   without contact it vanishes, and a ratio to it alone would read 1 (noise over noise). The
+//!   forces of J's terms (elastic, gas, gravity, inertia; and the reactions at fixed vertices)
+//!   do not vanish there: they are what balances. So κ is the unbalanced force relative to
+//!   the largest force in the balance, a number in `[0, 1]` that does not depend on the units
+//!   of length or energy (tested).
+//!
+//! The non-negative least-squares problem is solved by the Lawson–Hanson active-set method on
+//! the `G⁻¹`-weighted normal equations `Q = Bᵀ G⁻¹ B`, `c = Bᵀ G⁻¹ J'` (B the generators as
+//! columns), with a Cholesky factor of `Q` on the passive set updated column by column (append:
+//! a triangular solve; removal: a rank-one update). It is exact on degenerate problems: a
+//! column enters the passive set only if it lowers the residual, which (in exact arithmetic)
+//! makes it independent of the columns already there, so `Q` on the passive set stays
+//! definite however many contacts are nearly parallel; a column whose pivot is below
+//! `1e-12` of its diagonal is numerically dependent and is left out. The passive set starts
+//! from the pairs the last sub-problem gave a positive multiplier, at those multipliers. The
+//! method stops when no generator makes an angle with the residual (in the `G⁻¹` inner
+//! product) whose cosine exceeds `1e-10`, up to round-off; the reported residual is then
+//! recomputed from the multipliers, so it is an upper bound of the minimum attained by
+//! non-negative multipliers.
+
+use crate::contact::distance::edge_edge_distance;
+use crate::contact::{near_pairs, p3, pair_rows, ContactPair};
+use crate::energy::Objective;
+use crate::scene::mesh::Mesh;
+use crate::solve::h1::{dot, H1Norm, H1Norms};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Cosine below which a generator is not worth adding (the stopping test).
+const DUAL_TOL: f64 = 1e-10;
+/// Relative pivot below which a generator is dependent on the passive set (the squared sine
+/// of its angle with the passive set's span).
+const PIVOT_TOL: f64 = 1e-12;
+/// The same for the warm start, which takes columns without asking whether they lower the
+/// residual: nearly parallel contacts would otherwise enter together and make `Q` on the
+/// passive set ill-conditioned (its condition number squares that of the columns).
+const WARM_PIVOT_TOL: f64 = 1e-6;
+
+/// Why the certificate could not be computed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CertificateError {
+    /// A contact pair is at distance 0: no normal, φ_h is not admissible.
+    #[error("contact pair {0:?} is at distance 0: no constraint gradient")]
+    ZeroDistance(ContactPair),
+}
+
+/// The minimality certificate of a configuration (see the module documentation).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Certificate {
+    /// `κ = ‖r‖ / S`, in `[0, 1]`.
+    pub kappa: f64,
+    /// `‖r‖_{H⁻¹}`, `r = J'(φ_h) − Σ μ_k ∇d_k` with the non-negative least-squares
+    /// multipliers.
+    pub residual: f64,
+    /// `‖J'(φ_h)‖_{H⁻¹}` on the free dofs.
+    pub gradient: f64,
+    /// `max_t ‖J_t'(φ_h)‖_{H⁻¹}` over J's terms, on all dofs.
+    pub term_force: f64,
+    /// `S = max(gradient, term_force)`.
+    pub scale: f64,
+    /// Pairs at distance ε (within `active_tol`).
+    pub pairs: usize,
+    /// Constraint gradients (the pairs', and the endpoint distances of parallel edges).
+    pub generators: usize,
+    /// Generators with a positive multiplier.
+    pub positive: usize,
+    /// The distance tolerance: pairs with `d_k ≤ ε + active_tol` count.
+    pub active_tol: f64,
+    /// Active-set iterations (columns added, warm start included).
+    pub iterations: usize,
+    /// Generators left out as numerically dependent that still had a positive cosine with
+    /// the residual at the end (0 when the active-set method met its optimality test).
+    pub unresolved: usize,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+/// One constraint gradient: `(free-dof column, value)` entries.
+struct Generator {
+    pair: ContactPair,
+    /// 0: the pair's distance; 1..=4: an endpoint distance of an edge–edge pair.
+    part: u8,
+    entries: Vec<(usize, f64)>,
+}
+
+fn sp_dot(b: &[(usize, f64)], v: &[f64]) -> f64 {
+    b.iter().map(|&(k, x)| x * v[k]).sum()
+}
+
+/// `aᵀb` with four partial sums (the dense triangular solves' inner loop; a fixed order, so
+/// deterministic).
+fn dot4(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a4, b4) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let (ra, rb) = (a4.remainder(), b4.remainder());
+    let mut s = [0.0f64; 4];
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            s[k] += x[k] * y[k];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// Entries `(col, value)` of `Σ coef·n` at each vertex, merged and restricted to free dofs.
+fn gradient_entries(
+    dim: usize,
+    col: &[usize],
+    parts: &[(usize, f64)],
+    n: &[f64],
+) -> Vec<(usize, f64)> {
+    let mut e: Vec<(usize, f64)> = Vec::with_capacity(parts.len() * dim);
+    for &(v, coef) in parts {
+        if coef == 0.0 {
+            continue;
+        }
+        for c in 0..dim {
+            let k = col[dim * v + c];
+            if k != usize::MAX {
+                e.push((k, coef * n[c]));
+            }
+        }
+    }
+    e.sort_by_key(|t| t.0);
+    let mut out: Vec<(usize, f64)> = Vec::with_capacity(e.len());
+    for (k, v) in e {
+        match out.last_mut() {
+            Some(last) if last.0 == k => last.1 += v,
+            _ => out.push((k, v)),
+        }
+    }
+    out.retain(|t| t.1 != 0.0);
+    out
+}
+
+/// The constraint gradients at `x` of the pairs within `eps + active_tol`, in the order of
+/// the broad phase (deterministic), with the count of pairs.
+fn generators(
+    mesh: &Mesh,
+    x: &[f64],
+    eps: f64,
+    active_tol: f64,
+    col: &[usize],
+) -> Result<(Vec<Generator>, usize), CertificateError> {
+    let reach = eps + active_tol;
+    let near = near_pairs(mesh, x, reach * (1.0 + 1e-9), true);
+    let dim = mesh.dim;
+    let mut out = Vec::new();
+    let mut pairs = 0;
+    for p in near {
+        let r = pair_rows(mesh, x, p).ok_or(CertificateError::ZeroDistance(p))?;
+        if r.distance > reach {
+            continue;
+        }
+        pairs += 1;
+        let n = [r.n.x, r.n.y, r.n.z];
+        let mut parts: Vec<(usize, f64)> = Vec::with_capacity(2 * r.len);
+        for i in 0..r.len {
+            parts.push((r.plus[i], r.weight[i]));
+            parts.push((r.minus[i], -r.weight[i]));
+        }
+        out.push(Generator {
+            pair: p,
+            part: 0,
+            entries: gradient_entries(dim, col, &parts, &n),
+        });
+        if let ContactPair::EdgeEdge { a, b } = p {
+            let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
+            let ends = [(ea[0], eb), (ea[1], eb), (eb[0], ea), (eb[1], ea)];
+            for (k, &(v, seg)) in ends.iter().enumerate() {
+                let pv = p3(x, v);
+                let q = edge_edge_distance(&pv, &pv, &p3(x, seg[0]), &p3(x, seg[1]));
+                if q.distance > reach {
+                    continue;
+                }
+                if q.distance.is_nan() || q.distance <= 0.0 {
+                    return Err(CertificateError::ZeroDistance(p));
+                }
+                let nv = (q.pb - q.pa) / q.distance;
+                let parts = [(v, -1.0), (seg[0], 1.0 - q.t), (seg[1], q.t)];
+                out.push(Generator {
+                    pair: p,
+                    part: k as u8 + 1,
+                    entries: gradient_entries(dim, col, &parts, &[nv.x, nv.y, nv.z]),
+                });
+            }
+        }
+    }
+    out.retain(|g| !g.entries.is_empty());
+    Ok((out, pairs))
+}
+
+/// A dense lower-triangular Cholesky factor `L Lᵀ = Q_PP`, row `i` holding `i + 1` entries.
+#[derive(Default)]
+struct Chol {
+    rows: Vec<Vec<f64>>,
+}
+
+impl Chol {
+    /// `L y = b`.
+    fn forward(&self, b: &[f64]) -> Vec<f64> {
+        let mut y = b.to_vec();
+        for (i, row) in self.rows.iter().enumerate() {
+            let s = dot4(&row[..i], &y[..i]);
+            y[i] = (y[i] - s) / row[i];
+        }
+        y
+    }
+
+    /// `L Lᵀ s = b`.
+    fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let mut y = self.forward(b);
+        for i in (0..self.rows.len()).rev() {
+            let row = &self.rows[i];
+            y[i] /= row[i];
+            let yi = y[i];
+            for (k, l) in row[..i].iter().enumerate() {
+                y[k] -= l * yi;
+            }
+        }
+        y
+    }
+
+    /// Appends a column with `Q_{P,j} = q` and `Q_jj = d`; false (nothing changed) when its
+    /// pivot is below `tol·d` (numerically dependent).
+    fn push(&mut self, q: &[f64], d: f64, tol: f64) -> bool {
+        let mut l = self.forward(q);
+        let piv = d - dot4(&l, &l);
+        if piv.is_nan() || piv <= tol * d {
+            return false;
+        }
+        l.push(piv.sqrt());
+        self.rows.push(l);
+        true
+    }
+
+    /// Removes row and column `k` (a rank-one update of the trailing block).
+    fn remove(&mut self, k: usize) {
+        self.rows.remove(k);
+        let mut x: Vec<f64> = self.rows[k..].iter_mut().map(|r| r.remove(k)).collect();
+        for jj in 0..x.len() {
+            let j = k + jj;
+            let ljj = self.rows[j][j];
+            let r = ljj.hypot(x[jj]);
+            let (c, s) = (r / ljj, x[jj] / ljj);
+            self.rows[j][j] = r;
+            for (ii, xi) in x.iter_mut().enumerate().skip(jj + 1) {
+                let row = &mut self.rows[k + ii];
+                row[j] = (row[j] + s * *xi) / c;
+                *xi = c * *xi - s * row[j];
+            }
+        }
+    }
+}
+
+/// The forces at `x`: `(‖J'(x)‖_{H⁻¹}` on the free dofs, `max_t ‖J_t'(x)‖_{H⁻¹}` over J's
+/// terms on all dofs`)`, and `G⁻¹J'` on the free dofs. `S = max` of the two is the scale of
+/// κ and, times the reference diameter, the energy scale of the outer stopping rule.
+pub fn forces(
+    energy: &dyn Objective,
+    x: &[f64],
+    norms: &H1Norms,
+) -> (f64, f64, Vec<f64>, Vec<f64>) {
+    let (free, all) = (&norms.free, &norms.all);
+    let g = free.restrict(&energy.gradient(x));
+    let mut vg = g.clone();
+    free.solve_in_place(&mut vg);
+    let gnorm = dot(&g, &vg).max(0.0).sqrt();
+    let term_force = energy
+        .term_gradients(x)
+        .iter()
+        .map(|gt| all.norm(&all.restrict(gt)))
+        .fold(0.0f64, f64::max);
+    (gnorm, term_force, g, vg)
+}
+
+/// The certificate at `x` (see the module documentation). `norms` are the scaled H¹ norms
+/// over the free dofs and over all dofs; `warm` the multiplier of each pair in the last
+/// sub-problem (the passive set starts from the positive ones); pairs within
+/// `eps + active_tol` of contact count.
+pub fn certificate(
+    mesh: &Mesh,
+    energy: &dyn Objective,
+    x: &[f64],
+    eps: f64,
+    active_tol: f64,
+    norms: &H1Norms,
+    warm: &HashMap<ContactPair, f64>,
+) -> Result<Certificate, CertificateError> {
+    let t0 = Instant::now();
+    let free: &H1Norm = &norms.free;
+    let (gnorm, term_force, g, _) = forces(energy, x, norms);
+    let scale = gnorm.max(term_force);
+    let (gens, pairs) = generators(mesh, x, eps, active_tol, &free.col)?;
+    let warm: Vec<f64> = gens
+        .iter()
+        .map(|b| {
+            if b.part == 0 {
+                warm.get(&b.pair).copied().unwrap_or(0.0)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    // Identical gradients (a vertex whose closest point is a vertex shared by two edges, in
+    // two pairs) are one column, with the sum of their warm multipliers.
+    let mut index: HashMap<Vec<(usize, u64)>, usize> = HashMap::new();
+    let mut cols: Vec<Vec<(usize, f64)>> = Vec::new();
+    let mut warm_cols: Vec<f64> = Vec::new();
+    for (b, w) in gens.into_iter().zip(warm) {
+        let key: Vec<(usize, u64)> = b.entries.iter().map(|&(k, v)| (k, v.to_bits())).collect();
+        match index.get(&key) {
+            Some(&j) => warm_cols[j] += w,
+            None => {
+                index.insert(key, cols.len());
+                cols.push(b.entries);
+                warm_cols.push(w);
+            }
+        }
+    }
+    let sol = nnls(
+        &g,
+        &cols,
+        &|v: &mut [f64]| free.solve_in_place(v),
+        &warm_cols,
+    );
+    Ok(Certificate {
+        kappa: if scale > 0.0 {
+            sol.residual / scale
+        } else {
+            0.0
+        },
+        residual: sol.residual,
+        gradient: gnorm,
+        term_force,
+        scale,
+        pairs,
+        generators: cols.len(),
+        positive: sol.mu.iter().filter(|&&v| v > 0.0).count(),
+        active_tol,
+        iterations: sol.iterations,
+        unresolved: sol.unresolved,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The solution of [`nnls`].
+pub(crate) struct Nnls {
+    /// The multiplier of each column (≥ 0).
+    pub mu: Vec<f64>,
+    /// `‖g − Σ μ_j b_j‖_{G⁻¹}`, recomputed from `mu`.
+    pub residual: f64,
+    /// Columns added (the warm start's included).
+    pub iterations: usize,
+    /// Columns left out as dependent whose cosine with the residual exceeds `100·DUAL_TOL`,
+    /// or 1 when the iteration cap was reached.
+    pub unresolved: usize,
+}
+
+/// `min_{μ ≥ 0} ‖g − Σ_j μ_j b_j‖_{G⁻¹}` by the Lawson–Hanson active-set method on the normal
+/// equations `Q = Bᵀ G⁻¹ B` (module documentation). `cols` are the sparse columns `b_j`,
+/// `solve` computes `G⁻¹ v` in place, and a column with `warm[j] > 0` starts in the passive
+/// set at `μ_j = warm[j]`.
+pub(crate) fn nnls(
+    g: &[f64],
+    cols: &[Vec<(usize, f64)>],
+    solve: &(dyn Fn(&mut [f64]) + Sync),
+    warm: &[f64],
+) -> Nnls {
+    let m = cols.len();
+    let mut lh = ActiveSet::new(g, cols, solve);
+    let mut iterations = 0;
+    // Warm start: the given positive multipliers.
+    for (j, &w) in warm.iter().enumerate() {
+        if w > 0.0 && lh.add(j, w, WARM_PIVOT_TOL) {
+            iterations += 1;
+        }
+    }
+    if !lh.pset.is_empty() {
+        lh.settle(false);
+    }
+    let cap = 10 * m + 100;
+    let unresolved;
+    loop {
+        let (t, rn) = lh.residual();
+        // w_j = b_jᵀ G⁻¹ r: the decrease of ½‖r‖² per unit of μ_j; cos_j = w_j / ‖b_j‖ is
+        // ‖r‖ times the cosine of the angle between r and b_j. The round-off of w_j is about
+        // u·‖b_j‖·(‖g‖ + ‖Bμ‖) ≤ u·‖b_j‖·(2‖g‖ + ‖r‖).
+        let floor = 128.0 * f64::EPSILON * (2.0 * lh.gnorm + rn);
+        let cos = lh.cosines(&t);
+        let best = (0..m)
+            .filter(|&j| !lh.in_p[j] && !lh.excluded[j])
+            .map(|j| (cos[j], j))
+            .filter(|&(cj, _)| cj > DUAL_TOL * rn + floor)
+            .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+        let Some((_, j)) = best else {
+            if lh.dirty {
+                // Optimal with a factor updated by removals: build it afresh on the passive
+                // set, solve again from there, and test again.
+                lh.rebuild();
+                continue;
+            }
+            unresolved = (0..m)
+                .filter(|&j| lh.excluded[j] && cos[j] > 100.0 * DUAL_TOL * rn + floor)
+                .count();
+            break;
+        };
+        if iterations >= cap {
+            unresolved = 1;
+            break;
+        }
+        iterations += 1;
+        if lh.add(j, 0.0, PIVOT_TOL) {
+            lh.settle(true);
+        } else {
+            lh.excluded[j] = true;
+        }
+    }
+    let (_, residual) = lh.residual();
+    let mut mu = vec![0.0; m];
+    for (&k, &mk) in lh.pset.iter().zip(&lh.mu) {
+        mu[k] = mk;
+    }
+    Nnls {
+        mu,
+        residual,
+        iterations,
+        unresolved,
+    }
+}
+
+/// The state of the Lawson–Hanson method: the passive set `pset` with its multipliers `mu`
+/// and the Cholesky factor of `Q` on it.
+struct ActiveSet<'a> {
+    g: &'a [f64],
+    cols: &'a [Vec<(usize, f64)>],
+    solve: &'a (dyn Fn(&mut [f64]) + Sync),
+    /// `‖g‖_{G⁻¹}`.
+    gnorm: f64,
+    /// `c_j = b_jᵀ G⁻¹ g`.
+    c: Vec<f64>,
+    /// `‖b_j‖_{G⁻¹}`, NaN until needed (one solve each).
+    bnorm: Vec<f64>,
+    chol: Chol,
+    pset: Vec<usize>,
+    mu: Vec<f64>,
+    in_p: Vec<bool>,
+    /// Columns found dependent on the passive set (forgotten at the next removal).
+    excluded: Vec<bool>,
+    /// Removals update the factor by rotations, which keeps the rounding errors of the
+    /// columns removed: the factor has seen one since it was last built afresh.
+    dirty: bool,
+}
+
+impl<'a> ActiveSet<'a> {
+    fn new(
+        g: &'a [f64],
+        cols: &'a [Vec<(usize, f64)>],
+        solve: &'a (dyn Fn(&mut [f64]) + Sync),
+    ) -> Self {
+        let m = cols.len();
+        let mut vg = g.to_vec();
+        solve(&mut vg);
+        ActiveSet {
+            g,
+            cols,
+            solve,
+            gnorm: dot(g, &vg).max(0.0).sqrt(),
+            c: cols.iter().map(|b| sp_dot(b, &vg)).collect(),
+            bnorm: vec![f64::NAN; m],
+            chol: Chol::default(),
+            pset: Vec::new(),
+            mu: Vec::new(),
+            in_p: vec![false; m],
+            excluded: vec![false; m],
+            dirty: false,
+        }
+    }
+
+    /// `G⁻¹ b_j`.
+    fn solve_col(&self, j: usize) -> Vec<f64> {
+        let mut z = vec![0.0; self.g.len()];
+        for &(k, v) in &self.cols[j] {
+            z[k] += v;
+        }
+        (self.solve)(&mut z);
+        z
+    }
+
+    /// Adds column j to the passive set at `μ_j = mu0`; false (nothing changed) when it is
+    /// zero or its pivot is below `tol` of its diagonal (dependent).
+    fn add(&mut self, j: usize, mu0: f64, tol: f64) -> bool {
+        let z = self.solve_col(j);
+        let d = sp_dot(&self.cols[j], &z);
+        self.bnorm[j] = d.max(0.0).sqrt();
+        let q: Vec<f64> = self
+            .pset
+            .iter()
+            .map(|&k| sp_dot(&self.cols[k], &z))
+            .collect();
+        if !(d > 0.0 && self.chol.push(&q, d, tol)) {
+            return false;
+        }
+        self.pset.push(j);
+        self.mu.push(mu0);
+        self.in_p[j] = true;
+        true
+    }
+
+    /// Moves μ towards the least-squares solution on the passive set, dropping the columns
+    /// that reach 0, until that solution is positive. `fresh`: the last column was just added
+    /// (at μ = 0); if the solution does not make it positive it cannot lower the residual
+    /// (round-off), and it is taken out again and excluded.
+    fn settle(&mut self, mut fresh: bool) {
+        loop {
+            let cp: Vec<f64> = self.pset.iter().map(|&k| self.c[k]).collect();
+            let s = self.chol.solve(&cp);
+            if fresh && s[s.len() - 1].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                let j = self.pset.pop().expect("a column was just added");
+                self.mu.pop();
+                self.chol.rows.pop();
+                self.in_p[j] = false;
+                self.excluded[j] = true;
+                return;
+            }
+            fresh = false;
+            if s.iter().all(|&v| v > 0.0) {
+                self.mu = s;
+                return;
+            }
+            let mut alpha = f64::INFINITY;
+            let mut hit = 0;
+            for (k, (&sk, &mk)) in s.iter().zip(&self.mu).enumerate() {
+                if sk <= 0.0 {
+                    let a = mk / (mk - sk);
+                    if a < alpha {
+                        alpha = a;
+                        hit = k;
+                    }
+                }
+            }
+            for (mk, sk) in self.mu.iter_mut().zip(&s) {
+                *mk += alpha * (sk - *mk);
+            }
+            self.mu[hit] = 0.0;
+            // drop every column at 0, from the end so that the indices stay valid
+            for k in (0..self.pset.len()).rev() {
+                if self.mu[k].is_nan() || self.mu[k] <= 0.0 {
+                    self.in_p[self.pset[k]] = false;
+                    self.pset.remove(k);
+                    self.mu.remove(k);
+                    self.chol.remove(k);
+                }
+            }
+            // a removal can make an excluded column independent again
+            self.excluded.iter_mut().for_each(|e| *e = false);
+            self.dirty = true;
+            if self.pset.is_empty() {
+                return;
+            }
+        }
+    }
+
+    /// Builds the factor afresh on the passive set (columns now dependent leave it), and
+    /// settles from the current multipliers.
+    fn rebuild(&mut self) {
+        self.dirty = false;
+        self.chol = Chol::default();
+        let (old_p, old_mu) = (std::mem::take(&mut self.pset), std::mem::take(&mut self.mu));
+        for (&k, &mk) in old_p.iter().zip(&old_mu) {
+            self.in_p[k] = false;
+            self.add(k, mk, PIVOT_TOL);
+        }
+        if !self.pset.is_empty() {
+            self.settle(false);
+        }
+    }
+
+    /// `(G⁻¹ r, ‖r‖_{G⁻¹})`, `r = g − Σ μ_k b_k`.
+    fn residual(&self) -> (Vec<f64>, f64) {
+        let mut r = self.g.to_vec();
+        for (&k, &mk) in self.pset.iter().zip(&self.mu) {
+            for &(d, v) in &self.cols[k] {
+                r[d] -= mk * v;
+            }
+        }
+        let mut t = r.clone();
+        (self.solve)(&mut t);
+        let rn = dot(&r, &t).max(0.0).sqrt();
+        (t, rn)
+    }
+
+    /// `w_j / ‖b_j‖` where `w_j = b_jᵀ t > 0`, else 0 (the norms computed where needed).
+    fn cosines(&mut self, t: &[f64]) -> Vec<f64> {
+        let w: Vec<f64> = self.cols.par_iter().map(|b| sp_dot(b, t)).collect();
+        let need: Vec<usize> = (0..w.len())
+            .filter(|&j| w[j] > 0.0 && self.bnorm[j].is_nan())
+            .collect();
+        let norms: Vec<f64> = need
+            .par_iter()
+            .map(|&j| sp_dot(&self.cols[j], &self.solve_col(j)).max(0.0).sqrt())
+            .collect();
+        for (&j, &b) in need.iter().zip(&norms) {
+            self.bnorm[j] = b;
+        }
+        w.iter()
+            .zip(&self.bnorm)
+            .map(|(&wj, &bj)| if wj > 0.0 && bj > 0.0 { wj / bj } else { 0.0 })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::mesh::{Body, BodyKind};
+    use nalgebra::{DMatrix, DVector};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A random SPD matrix `M Mᵀ + I` of size n and its solver.
+    fn spd(n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
+        let m = DMatrix::from_fn(n, n, |_, _| rng.gen_range(-1.0..1.0));
+        &m * m.transpose() + DMatrix::identity(n, n)
+    }
+
+    fn dense(b: &[(usize, f64)], n: usize) -> DVector<f64> {
+        let mut v = DVector::zeros(n);
+        for &(k, x) in b {
+            v[k] += x;
+        }
+        v
+    }
+
+    /// `‖v‖_{G⁻¹}`.
+    fn hm1(gm: &DMatrix<f64>, v: &DVector<f64>) -> f64 {
+        let z = gm.clone().cholesky().unwrap().solve(v);
+        v.dot(&z).max(0.0).sqrt()
+    }
+
+    /// The NNLS optimum by enumeration: every subset of columns with a definite normal
+    /// matrix whose least-squares multipliers are ≥ 0 (an optimal solution with linearly
+    /// independent support exists, Carathéodory), the smallest residual.
+    fn brute_force(gm: &DMatrix<f64>, g: &DVector<f64>, cols: &[DVector<f64>]) -> f64 {
+        let m = cols.len();
+        let ginv = gm.clone().try_inverse().unwrap();
+        let mut best = hm1(gm, g);
+        for mask in 1u32..(1 << m) {
+            let idx: Vec<usize> = (0..m).filter(|&j| mask >> j & 1 == 1).collect();
+            let b = DMatrix::from_fn(g.len(), idx.len(), |i, k| cols[idx[k]][i]);
+            let q = b.transpose() * &ginv * &b;
+            let c = b.transpose() * &ginv * g;
+            let Some(ch) = q.clone().cholesky() else {
+                continue;
+            };
+            if q.symmetric_eigenvalues().min() < 1e-9 * q.diagonal().max() {
+                continue;
+            }
+            let mu = ch.solve(&c);
+            if mu.iter().all(|&v| v >= 0.0) {
+                best = best.min(hm1(gm, &(g - &b * mu)));
+            }
+        }
+        best
+    }
+
+    fn run_nnls(
+        gm: &DMatrix<f64>,
+        g: &DVector<f64>,
+        cols: &[Vec<(usize, f64)>],
+        warm: &[f64],
+    ) -> Nnls {
+        let ch = gm.clone().cholesky().unwrap();
+        let solve = move |v: &mut [f64]| {
+            let z = ch.solve(&DVector::from_column_slice(v));
+            v.copy_from_slice(z.as_slice());
+        };
+        nnls(g.as_slice(), cols, &solve, warm)
+    }
+
+    /// NNLS optimality: μ ≥ 0, `w = Bᵀ G⁻¹ r ≤ tol` for every column and `|w_j| ≤ tol` where
+    /// `μ_j > 0` (a convex problem: these certify the minimum).
+    fn assert_kkt(gm: &DMatrix<f64>, g: &DVector<f64>, cols: &[Vec<(usize, f64)>], s: &Nnls) {
+        let n = g.len();
+        let mut r = g.clone();
+        for (b, &mu) in cols.iter().zip(&s.mu) {
+            assert!(mu >= 0.0, "negative multiplier {mu}");
+            r -= dense(b, n) * mu;
+        }
+        let t = gm.clone().cholesky().unwrap().solve(&r);
+        let rn = r.dot(&t).sqrt();
+        assert!(
+            (rn - s.residual).abs() <= 1e-12 * hm1(gm, g),
+            "{rn} vs {}",
+            s.residual
+        );
+        for (j, (b, &mu)) in cols.iter().zip(&s.mu).enumerate() {
+            let bd = dense(b, n);
+            let w = bd.dot(&t) / hm1(gm, &bd);
+            let tol = 1e-8 * rn + 1e-12 * hm1(gm, g);
+            assert!(w <= tol, "column {j}: cosine·‖r‖ {w:e} > {tol:e}");
+            if mu > 0.0 {
+                assert!(w.abs() <= tol, "column {j} in the passive set: {w:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn certificate_nnls_matches_enumeration_on_random_problems() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..40 {
+            let n = rng.gen_range(2..7);
+            let m = rng.gen_range(1..10);
+            let gm = spd(n, &mut rng);
+            let g = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
+            let mut cols: Vec<Vec<(usize, f64)>> = (0..m)
+                .map(|_| {
+                    (0..rng.gen_range(1..4))
+                        .map(|_| (rng.gen_range(0..n), rng.gen_range(-1.0..1.0)))
+                        .collect()
+                })
+                .collect();
+            if trial % 3 == 0 {
+                // a duplicate column (the same gradient from two pairs)
+                cols.push(cols[0].clone());
+            }
+            let dcols: Vec<DVector<f64>> = cols.iter().map(|b| dense(b, n)).collect();
+            let brute = brute_force(&gm, &g, &dcols);
+            for warm in [vec![0.0; cols.len()], vec![1.0; cols.len()]] {
+                let s = run_nnls(&gm, &g, &cols, &warm);
+                assert_kkt(&gm, &g, &cols, &s);
+                assert!(
+                    (s.residual - brute).abs() <= 1e-9 * hm1(&gm, &g),
+                    "trial {trial}: nnls {} vs enumeration {brute}",
+                    s.residual
+                );
+                assert_eq!(s.unresolved, 0, "trial {trial}");
+            }
+        }
+    }
+
+    #[test]
+    fn certificate_nnls_is_exact_on_degenerate_cones() {
+        // g in the cone of two columns b1, b2. The columns: each of b1, b2 thirty times, as
+        // exact positive multiples (the same gradient from several pairs) and as copies turned
+        // by 1e-6 to 1e-3 (nearly parallel contacts), plus columns pointing away. The
+        // minimum is 0; the method reaches it to round-off from a cold start and from a warm
+        // start on every column.
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let n = 8;
+        let gm = spd(n, &mut rng);
+        let b1: Vec<(usize, f64)> = vec![(0, 1.0), (3, -0.5), (5, 0.25)];
+        let b2: Vec<(usize, f64)> = vec![(1, 1.0), (3, 0.5), (6, -1.0)];
+        let g = dense(&b1, n) * 2.0 + dense(&b2, n) * 0.7;
+        let mut cols = Vec::new();
+        for k in 0..30 {
+            for b in [&b1, &b2] {
+                let mut c: Vec<(usize, f64)> = b
+                    .iter()
+                    .map(|&(i, v)| (i, v * (1.0 + 0.1 * k as f64)))
+                    .collect();
+                if k % 2 == 1 {
+                    let turn = 10f64.powi(-6 + (k % 4));
+                    c.push((rng.gen_range(0..n), turn * rng.gen_range(-1.0..1.0)));
+                }
+                cols.push(c);
+            }
+            cols.push(vec![(rng.gen_range(0..n), -rng.gen_range(0.1..1.0))]);
+        }
+        for warm in [vec![0.0; cols.len()], vec![1.0; cols.len()]] {
+            let s = run_nnls(&gm, &g, &cols, &warm);
+            assert_kkt(&gm, &g, &cols, &s);
+            assert!(
+                s.residual <= 1e-12 * hm1(&gm, &g),
+                "warm {}: residual {:e} of {:e}",
+                warm[0],
+                s.residual,
+                hm1(&gm, &g)
+            );
+            assert_eq!(s.unresolved, 0);
+        }
+    }
+
+    fn curve(name: &str, vertices: Vec<usize>, edges: Vec<usize>) -> Body {
+        Body {
+            name: name.into(),
+            kind: BodyKind::Curve,
+            vertices,
+            edges,
+            ..Default::default()
+        }
+    }
+
+    /// Two curves of one edge each, `[0, 1]` and `[2, 3]`, in dimension `dim`.
+    fn two_edges(dim: usize, x: &[f64], fixed: Vec<bool>) -> Mesh {
+        Mesh {
+            dim,
+            x_ref: x.to_vec(),
+            fixed,
+            edges: vec![[0, 1], [2, 3]],
+            edge_body: vec![0, 1],
+            bodies: vec![
+                curve("a", vec![0, 1], vec![0]),
+                curve("b", vec![2, 3], vec![1]),
+            ],
+            ..Default::default()
+        }
+    }
+
+    /// The distance whose gradient a generator is: the pair's (part 0) or an endpoint's
+    /// distance to the other edge (edge–edge parts 1–4).
+    fn distance(mesh: &Mesh, x: &[f64], pair: ContactPair, part: u8) -> f64 {
+        if part == 0 {
+            return pair_rows(mesh, x, pair).unwrap().distance;
+        }
+        let ContactPair::EdgeEdge { a, b } = pair else {
+            unreachable!()
+        };
+        let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
+        let (v, seg) = [(ea[0], eb), (ea[1], eb), (eb[0], ea), (eb[1], ea)][part as usize - 1];
+        let pv = p3(x, v);
+        edge_edge_distance(&pv, &pv, &p3(x, seg[0]), &p3(x, seg[1])).distance
+    }
+
+    /// Every generator at `x` against central differences of its distance (step 1e-6;
+    /// the distances are smooth there, so the error is O(1e-12)).
+    fn check_generators(mesh: &Mesh, x: &[f64], skip_part0: bool) -> usize {
+        let (col, _) = crate::solve::h1::dof_columns(mesh, true);
+        let (gens, _) = generators(mesh, x, 0.0, 10.0, &col).unwrap();
+        let mut checked = 0;
+        for gen in &gens {
+            if skip_part0 && gen.part == 0 {
+                continue;
+            }
+            for (dof, &c) in col.iter().enumerate() {
+                if c == usize::MAX {
+                    continue;
+                }
+                let h = 1e-6;
+                let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
+                xp[dof] += h;
+                xm[dof] -= h;
+                let fd = (distance(mesh, &xp, gen.pair, gen.part)
+                    - distance(mesh, &xm, gen.pair, gen.part))
+                    / (2.0 * h);
+                let an = gen.entries.iter().find(|e| e.0 == c).map_or(0.0, |e| e.1);
+                assert!(
+                    (fd - an).abs() <= 1e-7,
+                    "{:?} part {} dof {dof}: analytic {an} vs finite difference {fd}",
+                    gen.pair,
+                    gen.part
+                );
+            }
+            checked += 1;
+        }
+        checked
+    }
+
+    #[test]
+    fn certificate_point_edge_gradients_match_finite_differences() {
+        // Edge [0, 1] and edge [2, 3] of two curves; vertex 3 projects inside edge [0, 1],
+        // vertex 2 onto its end 1 (an endpoint gradient), 0 and 1 onto edge [2, 3].
+        let x = vec![0.0, 0.0, 1.0, 0.2, 1.3, 0.9, 0.4, 0.5];
+        let mesh = two_edges(2, &x, vec![false, true, false, false]);
+        assert_eq!(check_generators(&mesh, &x, false), 4);
+    }
+
+    #[test]
+    fn certificate_3d_gradients_match_finite_differences() {
+        // Two triangles (surfaces) one above the other, the upper one rotated: vertex–face and
+        // edge–edge pairs in general position.
+        let x = vec![
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, //
+            0.3, -0.2, 0.5, 0.9, 0.6, 0.55, -0.1, 0.7, 0.45,
+        ];
+        let faces = vec![[0, 1, 2], [3, 4, 5]];
+        let surface = |name: &str, vertices: Vec<usize>, edges: Vec<usize>, f: usize| Body {
+            name: name.into(),
+            kind: BodyKind::Surface,
+            vertices,
+            edges,
+            triangles: vec![f],
+            faces: vec![f],
+            ..Default::default()
+        };
+        let mesh = Mesh {
+            dim: 3,
+            x_ref: x.clone(),
+            fixed: vec![true, false, false, false, false, false],
+            edges: vec![[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3]],
+            edge_body: vec![0, 0, 0, 1, 1, 1],
+            triangles: faces.clone(),
+            faces,
+            face_body: vec![0, 1],
+            bodies: vec![
+                surface("low", vec![0, 1, 2], vec![0, 1, 2], 0),
+                surface("up", vec![3, 4, 5], vec![3, 4, 5], 1),
+            ],
+            ..Default::default()
+        };
+        let n = check_generators(&mesh, &x, false);
+        assert!(n >= 6 + 9, "{n} generators checked");
+    }
+
+    #[test]
+    fn certificate_parallel_edges_add_their_endpoint_distances() {
+        // Two parallel edges in space (rods), overlapping along their middle: the distance of
+        // the pair is not differentiable (eq. 12), the four endpoint distances are, and the
+        // two whose endpoint projects inside the other edge are at the pair's distance.
+        let x = vec![
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, //
+            0.4, 0.1, 0.0, 1.6, 0.1, 0.0,
+        ];
+        let mesh = two_edges(3, &x, vec![false; 4]);
+        let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
+        let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &col).unwrap();
+        assert_eq!(pairs, 1);
+        let parts: Vec<u8> = gens.iter().map(|g| g.part).collect();
+        // a1 = (1, 0, 0) projects inside b, b0 = (0.4, 0.1, 0) inside a: parts 2 and 3
+        assert_eq!(parts, vec![0, 2, 3]);
+        assert_eq!(check_generators(&mesh, &x, true), 4);
+    }
+}
