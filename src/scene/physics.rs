@@ -289,9 +289,7 @@ impl<'a> EnergyAssembler<'a> {
                 let tris = bodies.iter().flat_map(|&b| self.triangles(b)).collect();
                 Box::new(NeoHookeanPlaneStress2d::new(tris, x_ref, mu, lambda))
             }
-            (Material::NeoHookeanPlaneStress { .. }, _, _) => {
-                return Err(TermError::PlaneStress3d)
-            }
+            (Material::NeoHookeanPlaneStress { .. }, _, _) => return Err(TermError::PlaneStress3d),
             (Material::LinearElastic { mu, lambda, plane }, _, 2) => {
                 let tris = bodies.iter().flat_map(|&b| self.triangles(b)).collect();
                 Box::new(LinearElastic2d::new(tris, x_ref, mu, lambda, plane))

@@ -14,9 +14,9 @@ use super::schema::{
 };
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
+use crate::energy::DeadLoad;
 use crate::energy::TotalEnergy;
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
-use crate::energy::DeadLoad;
 use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use crate::scene::physics::{EnergyAssembler, Material};
 use crate::scene::Scene;
@@ -186,7 +186,12 @@ impl Ctx<'_> {
     /// A body's `material`, checked: the model its kind takes (string for curves,
     /// St Venant–Kirchhoff membrane for 3D surfaces; solids in [`Ctx::solid_material`]:
     /// neo-Hookean or linear elastic) and its coefficients.
-    fn material(&self, dim: usize, l: &Loaded, m: &MaterialSpec) -> Result<Material, SceneFileError> {
+    fn material(
+        &self,
+        dim: usize,
+        l: &Loaded,
+        m: &MaterialSpec,
+    ) -> Result<Material, SceneFileError> {
         if l.kind == BodyKind::Solid {
             return self.solid_material(dim, l, m);
         }
@@ -217,9 +222,9 @@ impl Ctx<'_> {
                     "the string model has no lambda",
                 ));
             }
-            let mu = m.mu.ok_or_else(|| {
-                self.invalid(line, format!("{mk}.mu"), "(missing)", "required")
-            })?;
+            let mu = m
+                .mu
+                .ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
             if !(mu > 0.0 && mu.is_finite()) {
                 return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
             }
