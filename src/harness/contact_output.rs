@@ -711,7 +711,23 @@ impl Writer<OuterLoop> for StaticContacts<'_> {
         self.out.flush()?;
         Ok(())
     }
-    fn finish(&mut self, _outcome: &RunResult) -> Result<()> {
+    /// After an accepted polish at ε (not an outer step) the returned state differs from the
+    /// last step's: its rows are written once more, as step `outer_iterations + 1`, so the
+    /// last step of the file is the returned state (the one of `final.vtu` and `summary.json`).
+    fn finish(&mut self, outcome: &RunResult) -> Result<()> {
+        if outcome.polish.as_ref().is_some_and(|p| p.accepted) {
+            let st = contact_state(
+                self.mesh,
+                self.energy,
+                &outcome.x,
+                self.eps,
+                &outcome.last_rows,
+                &outcome.multipliers,
+            );
+            for r in contact_rows(self.mesh, &st, self.eps, outcome.outer_iterations + 1) {
+                self.out.serialize(r)?;
+            }
+        }
         Ok(self.out.flush()?)
     }
 }
