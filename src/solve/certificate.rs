@@ -886,7 +886,7 @@ mod tests {
     /// the distances are smooth there, so the error is O(1e-12)).
     fn check_generators(mesh: &Mesh, x: &[f64], skip_part0: bool) -> usize {
         let (col, _) = crate::solve::h1::dof_columns(mesh, true);
-        let (gens, _) = generators(mesh, x, 0.0, 10.0, &col).unwrap();
+        let (gens, _) = generators(mesh, x, 0.0, 10.0, &HashMap::new(), &col).unwrap();
         let mut checked = 0;
         for gen in &gens {
             if skip_part0 && gen.part == 0 {
@@ -973,11 +973,31 @@ mod tests {
         ];
         let mesh = two_edges(3, &x, vec![false; 4]);
         let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
-        let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &col).unwrap();
+        let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &HashMap::new(), &col).unwrap();
         assert_eq!(pairs, 1);
         let parts: Vec<u8> = gens.iter().map(|g| g.part).collect();
         // a1 = (1, 0, 0) projects inside b, b0 = (0.4, 0.1, 0) inside a: parts 2 and 3
         assert_eq!(parts, vec![0, 2, 3]);
         assert_eq!(check_generators(&mesh, &x, true), 4);
+    }
+
+    #[test]
+    fn certificate_counts_a_pair_the_sub_problem_held_beyond_the_tolerance() {
+        // The same rods 1e-9 farther apart than ε + active_tol: not a generator by its gap,
+        // a generator when the last sub-problem held it.
+        let x = vec![
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, //
+            0.4, 0.1, 0.0, 1.6, 0.1, 0.0,
+        ];
+        let mesh = two_edges(3, &x, vec![false; 4]);
+        let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
+        let eps = 0.1 - 2e-9;
+        let (gens, pairs) = generators(&mesh, &x, eps, 1e-9, &HashMap::new(), &col).unwrap();
+        assert_eq!((gens.len(), pairs), (0, 0));
+        let pair = near_pairs(&mesh, &x, 0.2, true)[0];
+        let held = HashMap::from([(pair, 1.0)]);
+        let (gens, pairs) = generators(&mesh, &x, eps, 1e-9, &held, &col).unwrap();
+        assert_eq!(pairs, 1);
+        assert_eq!(gens[0].pair, pair);
     }
 }
