@@ -584,6 +584,10 @@ pub struct OuterEvent<'a> {
     pub record: &'a IterationRecord,
     /// The step's iterate (the sub-problem's solution, admissible or not).
     pub x: &'a [f64],
+    /// The rows of the step's last QP (empty at iteration 0).
+    pub rows: &'a [PairRows],
+    /// Their multipliers (`μ ≥ 0`, one per row of each pair; empty at iteration 0).
+    pub multipliers: &'a [[f64; 4]],
 }
 
 impl Loop for OuterLoop {
@@ -698,6 +702,8 @@ pub fn run_observed(
             t_solve_s: 0.0,
         },
         x: &x,
+        rows: &[],
+        multipliers: &[],
     });
     let mut result = RunResult {
         x: Vec::new(),
@@ -750,6 +756,8 @@ pub fn run_observed(
         observer.iteration(&OuterEvent {
             record: &step.record,
             x: &sub.y,
+            rows: &sub.rows,
+            multipliers: &sub.multipliers,
         });
         if !step.record.admissible {
             result.status = RunStatus::Inadmissible;
