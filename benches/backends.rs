@@ -1,4 +1,4 @@
-//! Criterion benches of the three backends on QPs captured from the balloons scene, and of the
+//! Criterion benches of the backends on QPs captured from the balloons scene, and of the
 //! point–edge distance kernel.
 //!
 //! - `backends/captured/{backend}/{n}`: the balloons at `n ∈ {20, 40, 80}` elements per
@@ -12,6 +12,7 @@
 //!
 //! ```text
 //! source scripts/ensure-cmake.sh && cargo bench --bench backends
+//! cargo bench --bench backends -- 'captured/(clarabel|ip)/'   # two of them
 //! ```
 
 use std::time::Duration;
@@ -27,7 +28,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const SIZES: [usize; 3] = [20, 40, 80];
-const BACKENDS: [&str; 3] = ["clarabel", "osqp", "uzawa"];
+const BACKENDS: [&str; 4] = ["clarabel", "ip", "osqp", "uzawa"];
 
 /// Four QPs evenly spaced over a Clarabel run of the balloons at `n`.
 fn captured(n: usize) -> Vec<Qp> {
