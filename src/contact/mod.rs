@@ -26,6 +26,7 @@
 
 pub mod admissibility;
 pub mod broad_phase;
+pub mod continuous;
 pub mod bvh;
 pub mod distance;
 pub mod edge_edge;

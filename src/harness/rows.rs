@@ -112,6 +112,8 @@ pub struct CaseColumns {
     pub accuracy: String,
     /// Pruning mode.
     pub pruning: String,
+    /// Outer method (`pantz`, `sqp`).
+    pub outer_method: String,
 }
 
 /// What every kind of run row can say about itself: how a failed run (an error, a panic)

@@ -22,6 +22,7 @@ use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
+use crate::solve::sqp::OuterMethod;
 use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
@@ -79,6 +80,11 @@ pub struct RunArgs {
     /// projected, the previous model). docs/method.md, "The Newton model".
     #[arg(long, default_value = "shifted", value_parser = parse_newton_model)]
     pub newton_model: HessianModel,
+    /// The outer method: pantz (the paper's T(ψ) steps) or sqp (steps on the linearized true
+    /// distances, with a correction, an exact and a continuous check, Pantz's step as the
+    /// fallback). docs/method.md, "The SQP outer method".
+    #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
+    pub outer_method: OuterMethod,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -143,6 +149,11 @@ fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
             "--newton-model {s:?}: expected one of shifted, projected"
         )),
     }
+}
+
+fn parse_outer_method(s: &str) -> Result<OuterMethod, String> {
+    OuterMethod::from_name(s)
+        .ok_or_else(|| format!("--outer-method {s:?}: expected one of {}", OuterMethod::names()))
 }
 
 fn parse_pruning(s: &str) -> Result<Pruning, String> {
@@ -254,6 +265,11 @@ fn scene_from_file(
     from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
         .map_err(anyhow::Error::msg));
     from_file!("no_warm_start", warm_start);
+    if !explicit("outer_method") {
+        if let Some(m) = &s.outer_method {
+            settings.outer_method = parse_outer_method(m).map_err(anyhow::Error::msg)?;
+        }
+    }
     if !explicit("newton_model") {
         if let Some(m) = &s.newton_model {
             settings.hessian_model = parse_newton_model(m).map_err(anyhow::Error::msg)?;
@@ -284,6 +300,7 @@ impl RunArgs {
             warm_start: !self.no_warm_start,
             time_limit_s: self.time_limit,
             hessian_model: self.newton_model,
+            outer_method: self.outer_method,
         }
     }
 }
