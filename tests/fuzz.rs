@@ -1,7 +1,8 @@
 //! Seeded fuzz and property tests.
 //!
 //! * Parsers: random bytes and mutated valid files (scene TOML, `.msh`, `.obj`) must give `Ok`
-//!   or `Err`, never a panic.
+//!   or `Err`, never a panic. Scene files are loaded as a run loads them, with the solver's
+//!   rules for `[solver]` and `[dynamics]` (`harness::scene_file::SolveRules`).
 //! * Distance kernels (`point_edge`, `point_triangle`, `segment_segment`): on finite inputs,
 //!   degenerate ones included, no NaN; symmetric under the argument swaps that leave the
 //!   distance unchanged; equal to a dense sampling of the primitives within the sampling's
@@ -15,11 +16,13 @@
 use contactlab::contact::distance::{
     edge_edge_distance, point_edge_distance, point_triangle_distance,
 };
+use contactlab::harness::scene_file::SolveRules;
 use contactlab::scene::file;
 use contactlab::scene::meshio::{msh::parse_msh, obj::parse_obj};
 use nalgebra::{Vector2, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::cell::Cell;
 use std::path::{Path, PathBuf};
 
 fn scale() -> usize {
@@ -160,7 +163,7 @@ fn read(p: &str) -> String {
 }
 
 #[test]
-fn fuzz_scene_parser_never_panics() {
+fn fuzz_scene_loading_never_panics() {
     // mesh paths resolve next to the seeds, so mutants also exercise the mesh loading
     let ring_path = root().join("experiments/scenes/ring.toml");
     let good_path = root().join("tests/data/good_strings.toml");
@@ -169,12 +172,29 @@ fn fuzz_scene_parser_never_panics() {
         read("tests/data/good_strings.toml"),
         read("tests/data/bad/unbounded.toml"),
         read("tests/data/bad/open_gas_surface.toml"),
+        // [solver] and [dynamics] tables, checked by the solver's rules: good ones, and ones
+        // the rules refuse (a bad newton_model, a bad scheme)
+        read("experiments/scenes/two_strings.toml"),
+        read("tests/data/dynamic_string.toml"),
+        read("tests/data/bad/solver_bad_newton_model.toml"),
+        read("tests/data/bad/dynamics_bad_scheme.toml"),
     ];
     let n = 300 * scale();
+    // mutants that only the solver's rules refuse: the loader under test applies them (the
+    // scene stage's `parse` alone accepts these)
+    let refused_by_rules = Cell::new(0);
     fuzz(1, &seeds, n, &|t: &str| {
-        let _ = file::parse(t, &ring_path);
-        let _ = file::parse(t, &good_path);
+        for path in [&ring_path, &good_path] {
+            let run = file::parse_with(t, path, &SolveRules);
+            if run.is_err() && file::parse(t, path).is_ok() {
+                refused_by_rules.set(refused_by_rules.get() + 1);
+            }
+        }
     });
+    assert!(
+        refused_by_rules.get() > 0,
+        "no mutant was refused by the [solver] or [dynamics] rules alone"
+    );
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! `contactlab sweep` end to end, through the binary: an interrupted sweep resumed gives the
 //! rows of an uninterrupted one; shards 1/2 and 2/2 together give the rows of the unsharded
-//! sweep; a failing run is a row, not an abort; an existing CSV is not overwritten.
+//! sweep; a failing run is a row, not an abort; an existing CSV is not overwritten. And
+//! `contactlab scaling`: a rerun skips the cases already in its CSV.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -273,4 +274,75 @@ fn sweep_sigkilled_twice_and_resumed_equals_uninterrupted() {
         a,
         "resumed rows differ from the uninterrupted sweep"
     );
+}
+
+/// `contactlab scaling` into `csv` (one case: balloons n = 6, lazy rows, the first outer step).
+fn scaling(d: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "scaling", "--out", "s.csv", "--sizes", "6", "--modes", "lazy",
+        ])
+        .args(["--full-max-n", "0", "--case-timeout-s", "300"])
+        .current_dir(d)
+        .output()
+        .unwrap()
+}
+
+/// The data rows of a CSV, as text.
+fn lines(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines().skip(1).map(String::from).collect()
+}
+
+#[test]
+fn scaling_rerun_skips_the_cases_in_its_csv() {
+    let d = dir("scaling_resume");
+    let out = scaling(&d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let first = lines(&d.join("s.csv"));
+    assert_eq!(first.len(), 1, "{first:?}");
+    // trust_delta0 = 1 is written as the resume key reads it
+    let mut r = csv::Reader::from_path(d.join("s.csv")).unwrap();
+    let hdr = r.headers().unwrap().clone();
+    let rec = r.records().next().unwrap().unwrap();
+    let cell = |c: &str| {
+        rec.get(hdr.iter().position(|h| h == c).unwrap())
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(
+        (cell("trust_delta0"), cell("status")),
+        ("1".into(), "one_step_done".into())
+    );
+    // a rerun skips the case: the CSV keeps its one row
+    let out = scaling(&d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("n=6 lazy one_step: in the CSV, skipped"),
+        "{err}"
+    );
+    assert_eq!(lines(&d.join("s.csv")), first);
+    // a row written with trust_delta0 = 1.0 (by the binaries before the key read it as a
+    // number) is the same case
+    let text = std::fs::read_to_string(d.join("s.csv")).unwrap();
+    let old = text.replacen(",one_step,1,", ",one_step,1.0,", 1);
+    assert_ne!(old, text);
+    std::fs::write(d.join("s.csv"), &old).unwrap();
+    let out = scaling(&d);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("in the CSV, skipped"));
+    assert_eq!(lines(&d.join("s.csv")).len(), 1);
 }

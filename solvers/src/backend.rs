@@ -70,8 +70,11 @@ pub enum QpError {
         /// Why it is rejected.
         reason: &'static str,
     },
-    /// The backend name is not one of [`crate::BACKEND_NAMES`].
-    #[error("unknown backend {0:?} (expected one of clarabel, osqp, uzawa)")]
+    /// The backend name is not one of [`crate::BACKEND_NAMES`] (which the message lists).
+    #[error(
+        "unknown backend {0:?} (expected one of {names})",
+        names = crate::BACKEND_NAMES.join(", ")
+    )]
     UnknownBackend(String),
     /// Warm start vectors of the wrong length.
     #[error("warm start {what} has length {found}, expected {expected}")]

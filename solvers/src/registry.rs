@@ -189,6 +189,17 @@ mod tests {
             );
         }
         assert!(backend("gurobi").is_none());
+        // the refusal lists every registered backend
+        let e = backend_from_name("gurobi", &QpSettings::default())
+            .err()
+            .expect("gurobi is not registered");
+        assert_eq!(
+            e.to_string(),
+            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, osqp, uzawa)"
+        );
+        for name in BACKEND_NAMES {
+            assert!(e.to_string().contains(name), "{name}");
+        }
         assert_eq!(
             backend_list_help(),
             "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \

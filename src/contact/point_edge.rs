@@ -9,7 +9,7 @@
 //! are linear in φ, so T(ψ) is a convex polyhedron; it contains ψ when ψ is admissible, and by
 //! Lemma 4.2 it lies inside A_{h,ε}. The only pairs left out of the rows are those whose three
 //! vertices are all fixed: their rows are constant, so they are checked once at the start
-//! ([`super::admissibility::fixed_pairs_admissible`]) and never again.
+//! ([`super::admissibility::min_distance`] with `skip_fixed = false`) and never again.
 
 use super::distance::point_edge_distance;
 use crate::scene::mesh::Mesh;

@@ -7,11 +7,8 @@
 //! so with `g = (0, −9.81)` it is `Σ_v m_v · 9.81 · y_v`. Linear in `x`: gradient `−m_v g`,
 //! zero Hessian.
 //!
-//! The lumped masses of P1 elements of density `ρ` (each element gives an equal share of its
-//! reference mass to each of its vertices): in 2D [`Gravity::lumped_edges`] (per unit length)
-//! and [`Gravity::lumped_triangles`] (per unit area) build the term; in 3D
-//! [`Gravity::add_edges`] (rods, per unit length), [`Gravity::add_triangles`] (sheets, per
-//! unit area) and [`Gravity::add_tets`] (solids, per unit volume) add to its masses.
+//! The masses are the lumped P1 masses of the bodies' densities ([`super::mass`]), the same
+//! as those of time stepping's inertia.
 
 use super::{chunked_sum, Energy, Hessian, TermKind};
 use rayon::prelude::*;
@@ -29,90 +26,6 @@ impl<const D: usize> Gravity<D> {
     /// Gravity with the given vertex masses.
     pub fn new(mass: Vec<f64>, g: [f64; D]) -> Self {
         Self { mass, g }
-    }
-}
-
-impl Gravity<2> {
-    /// Lumped masses of P1 triangles of density `rho` (per unit area): each triangle gives a
-    /// third of its reference mass to each vertex. `nv` is the number of vertices.
-    pub fn lumped_triangles(
-        nv: usize,
-        triangles: &[[usize; 3]],
-        x_ref: &[f64],
-        rho: f64,
-        g: [f64; 2],
-    ) -> Self {
-        let mut mass = vec![0.0; nv];
-        for t in triangles {
-            let p = |v: usize, k: usize| x_ref[2 * v + k];
-            let area = 0.5
-                * ((p(t[1], 0) - p(t[0], 0)) * (p(t[2], 1) - p(t[0], 1))
-                    - (p(t[2], 0) - p(t[0], 0)) * (p(t[1], 1) - p(t[0], 1)))
-                .abs();
-            for &v in t {
-                mass[v] += rho * area / 3.0;
-            }
-        }
-        Self { mass, g }
-    }
-
-    /// Lumped masses of P1 edges of density `rho` (per unit length): half to each end.
-    pub fn lumped_edges(
-        nv: usize,
-        edges: &[[usize; 2]],
-        x_ref: &[f64],
-        rho: f64,
-        g: [f64; 2],
-    ) -> Self {
-        let mut mass = vec![0.0; nv];
-        for &[a, b] in edges {
-            let l = (x_ref[2 * b] - x_ref[2 * a]).hypot(x_ref[2 * b + 1] - x_ref[2 * a + 1]);
-            mass[a] += 0.5 * rho * l;
-            mass[b] += 0.5 * rho * l;
-        }
-        Self { mass, g }
-    }
-}
-
-/// Vertex `v` of the flat 3D positions `x`.
-fn p3(x: &[f64], v: usize) -> nalgebra::Vector3<f64> {
-    nalgebra::Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])
-}
-
-impl Gravity<3> {
-    /// Adds the lumped masses of P1 edges of density `rho` per unit length (half to each end).
-    pub fn add_edges(&mut self, edges: &[[usize; 2]], x_ref: &[f64], rho: f64) {
-        for &[a, b] in edges {
-            let m = rho * (p3(x_ref, b) - p3(x_ref, a)).norm();
-            self.mass[a] += 0.5 * m;
-            self.mass[b] += 0.5 * m;
-        }
-    }
-
-    /// Adds the lumped masses of P1 triangles of density `rho` per unit area (a third each).
-    pub fn add_triangles(&mut self, triangles: &[[usize; 3]], x_ref: &[f64], rho: f64) {
-        for t in triangles {
-            let (a, b, c) = (p3(x_ref, t[0]), p3(x_ref, t[1]), p3(x_ref, t[2]));
-            let m = rho * 0.5 * (b - a).cross(&(c - a)).norm();
-            for &v in t {
-                self.mass[v] += m / 3.0;
-            }
-        }
-    }
-
-    /// Adds the lumped masses of P1 tetrahedra of density `rho` per unit volume (a quarter
-    /// each).
-    pub fn add_tets(&mut self, tets: &[[usize; 4]], x_ref: &[f64], rho: f64) {
-        for t in tets {
-            let a = p3(x_ref, t[0]);
-            let vol = ((p3(x_ref, t[1]) - a).cross(&(p3(x_ref, t[2]) - a)))
-                .dot(&(p3(x_ref, t[3]) - a))
-                .abs()
-                / 6.0;
-            for &v in t {
-                self.mass[v] += rho * vol / 4.0;
-            }
-        }
     }
 }
 
@@ -194,18 +107,6 @@ mod tests {
     }
 
     #[test]
-    fn energy_gravity_lumped_masses() {
-        let xr = [0.0, 0.0, 2.0, 0.0, 0.0, 3.0];
-        let gt = Gravity::lumped_triangles(3, &[[0, 1, 2]], &xr, 2.0, [0.0, -1.0]);
-        let total: f64 = gt.mass.iter().sum();
-        assert!((total - 6.0).abs() < 1e-14);
-        let ge = Gravity::lumped_edges(3, &[[0, 1], [1, 2]], &xr, 1.0, [0.0, -1.0]);
-        let total: f64 = ge.mass.iter().sum();
-        assert!((total - (2.0 + 13f64.sqrt())).abs() < 1e-14);
-        assert!((ge.mass[0] - 1.0).abs() < 1e-15);
-    }
-
-    #[test]
     fn energy_gravity_thread_independent() {
         use crate::energy::fd_test::{assert_thread_independent, term_bits};
         use crate::energy::CHUNK;
@@ -224,16 +125,12 @@ mod tests {
     }
 
     #[test]
-    fn energy_gravity3d_value_gradient_and_lumped_masses() {
-        // unit cube corner tet (volume 1/6), a right triangle of area 1/2, an edge of length 1
+    fn energy_gravity3d_value_gradient_hessian() {
+        // the lumped masses of a unit cube corner tet (density 6), its right triangle in z = 0
+        // (density 2) and its edge along z (density 1)
         let x = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        let mut g = Gravity::new(vec![0.0; 4], [0.0, 0.0, -9.81]);
-        g.add_tets(&[[0, 1, 2, 3]], &x, 6.0);
-        assert!((g.mass.iter().sum::<f64>() - 1.0).abs() < 1e-15);
-        g.add_triangles(&[[0, 1, 2]], &x, 2.0);
-        assert!((g.mass.iter().sum::<f64>() - 2.0).abs() < 1e-15);
-        g.add_edges(&[[0, 3]], &x, 1.0);
-        assert!((g.mass.iter().sum::<f64>() - 3.0).abs() < 1e-15);
+        let (t, e) = (0.25 + 1.0 / 3.0, 0.5);
+        let g = Gravity::new(vec![t + e, t, t, 0.25 + e], [0.0, 0.0, -9.81]);
         // J = Σ m_v 9.81 z_v: only vertex 3 is above z = 0
         assert!((g.value(&x) - 9.81 * g.mass[3]).abs() < 1e-14);
         let mut grad = vec![0.0; 12];

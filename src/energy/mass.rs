@@ -60,41 +60,51 @@ pub fn lumped_mass(mesh: &Mesh, x_ref: &[f64], density: &[f64]) -> Result<Vec<f6
             });
         }
     }
-    let p = |v: usize| mesh.point(x_ref, v);
     let mut mass = vec![0.0; mesh.nv()];
-    for (body, &rho) in mesh.bodies.iter().zip(density) {
-        if !body.tets.is_empty() {
-            for &t in &body.tets {
-                let t = mesh.tets[t];
-                let a = p(t[0]);
-                let vol = (p(t[1]) - a)
-                    .cross(&(p(t[2]) - a))
-                    .dot(&(p(t[3]) - a))
-                    .abs()
-                    / 6.0;
-                for v in t {
-                    mass[v] += rho * vol / 4.0;
-                }
-            }
-        } else if !body.triangles.is_empty() {
-            for &t in &body.triangles {
-                let t = mesh.triangles[t];
-                let area = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
-                for v in t {
-                    mass[v] += rho * area / 3.0;
-                }
-            }
-        } else {
-            debug_assert!(body.kind == BodyKind::Curve || body.edges.is_empty());
-            for &e in &body.edges {
-                let [a, b] = mesh.edges[e];
-                let l = (p(b) - p(a)).norm();
-                mass[a] += 0.5 * rho * l;
-                mass[b] += 0.5 * rho * l;
-            }
-        }
+    for (b, &rho) in density.iter().enumerate() {
+        add_body_mass(&mut mass, mesh, x_ref, b, rho);
     }
     Ok(mass)
+}
+
+/// Adds body `b`'s lumped P1 masses of density `rho` to `mass` (one entry per vertex), as
+/// [`lumped_mass`] does for each body (which checks its input; this does not): the elements of
+/// highest dimension, each giving an equal share of its reference mass to each of its
+/// vertices, in the body's element order. The gravity load of a scene is made of these
+/// (`scene::physics`).
+pub fn add_body_mass(mass: &mut [f64], mesh: &Mesh, x_ref: &[f64], b: usize, rho: f64) {
+    let p = |v: usize| mesh.point(x_ref, v);
+    let body = &mesh.bodies[b];
+    if !body.tets.is_empty() {
+        for &t in &body.tets {
+            let t = mesh.tets[t];
+            let a = p(t[0]);
+            let vol = (p(t[1]) - a)
+                .cross(&(p(t[2]) - a))
+                .dot(&(p(t[3]) - a))
+                .abs()
+                / 6.0;
+            for v in t {
+                mass[v] += rho * vol / 4.0;
+            }
+        }
+    } else if !body.triangles.is_empty() {
+        for &t in &body.triangles {
+            let t = mesh.triangles[t];
+            let area = 0.5 * (p(t[1]) - p(t[0])).cross(&(p(t[2]) - p(t[0]))).norm();
+            for v in t {
+                mass[v] += rho * area / 3.0;
+            }
+        }
+    } else {
+        debug_assert!(body.kind == BodyKind::Curve || body.edges.is_empty());
+        for &e in &body.edges {
+            let [a, b] = mesh.edges[e];
+            let l = (p(b) - p(a)).norm();
+            mass[a] += 0.5 * rho * l;
+            mass[b] += 0.5 * rho * l;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -149,7 +159,8 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("body 1 is -1"), "{e}");
-        // 3D: a tet of volume 1/6 (density 6) and a surface triangle of area 1/2 (density 4)
+        // 3D: a tet of volume 1/6 (density 6), a surface triangle of area 1/2 (density 4) and
+        // a curve of one edge of length 1 along z (density 3)
         let x = vec![
             0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 5.0, 0.0, 0.0, 6.0, 0.0,
             0.0, 5.0, 1.0, 0.0,
@@ -160,6 +171,7 @@ mod tests {
             fixed: vec![false; 7],
             tets: vec![[0, 1, 2, 3]],
             triangles: vec![[4, 5, 6]],
+            edges: vec![[0, 3]],
             bodies: vec![
                 Body {
                     kind: BodyKind::Solid,
@@ -171,11 +183,20 @@ mod tests {
                     triangles: vec![0],
                     ..Default::default()
                 },
+                Body {
+                    kind: BodyKind::Curve,
+                    edges: vec![0],
+                    ..Default::default()
+                },
             ],
             ..Default::default()
         };
-        let m = lumped_mass(&mesh3, &x, &[6.0, 4.0]).unwrap();
-        assert!((m[..4].iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        let m = lumped_mass(&mesh3, &x, &[6.0, 4.0, 3.0]).unwrap();
+        assert!((m[..4].iter().sum::<f64>() - 4.0).abs() < 1e-15);
         assert!((m[4..].iter().sum::<f64>() - 2.0).abs() < 1e-15);
+        assert!(
+            (m[0] - 1.75).abs() < 1e-15 && (m[3] - 1.75).abs() < 1e-15,
+            "{m:?}"
+        );
     }
 }

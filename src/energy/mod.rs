@@ -40,9 +40,11 @@
 //!    (positive semi-definite), rigid invariance and thread independence (helpers in
 //!    `fd_test.rs`);
 //! 2. this file: `pub mod NAME;` and the `pub use` of the type;
-//! 3. what uses it: the scene builder (`src/scene/`) that pushes it into a scene's
-//!    [`TotalEnergy`], or the scene-file schema (the `[[body]]` keys read by the scene-file
-//!    loader) to offer it in scene files.
+//! 3. the energy assembler that builds it into a scene's [`TotalEnergy`]
+//!    (`src/scene/physics.rs`: a `Material` variant or a `BodyPhysics` field, and the step
+//!    that makes the term), shared by the built-in scenes and the scene files; a built-in
+//!    scene then uses it from its description, and a scene file once the loader reads its
+//!    `[[body]]` key (`src/scene/file/`).
 //!
 //! Nothing else needs to know the term: the outer loop, the QP assembly and the dynamic runs
 //! only see a [`TotalEnergy`] and each term's [`TermKind`].
@@ -52,7 +54,7 @@
 //! Assembly is rayon-parallel, and its results are bit-for-bit independent of the number of
 //! rayon threads:
 //!
-//! * sums (energy values, the gas shoelace area) are split into fixed chunks of [`CHUNK`]
+//! * sums (energy values, the gas shoelace area) are split into fixed chunks of `CHUNK`
 //!   elements, independent of the thread count; one partial sum is computed per chunk and the
 //!   partials are added sequentially in chunk order;
 //! * gradients: per-element contributions are computed in parallel (independently of each
@@ -305,7 +307,7 @@ pub enum HessianModel {
     Projected,
     /// Element terms projected, global-measure terms ([`Energy::exact_in_model`]) exact; the
     /// sub-problem makes the model positive definite with an adaptive shift `σI` checked by
-    /// an inertia test (`crate::solve::subproblem`). The default.
+    /// an inertia test (docs/method.md, "The Newton model"). The default.
     #[default]
     Shifted,
 }
@@ -584,17 +586,21 @@ mod tests {
             x[2 * v] = 1.2 * px + 0.1 * py + rng.gen_range(-0.01..0.01);
             x[2 * v + 1] = -0.1 * px + 0.9 * py + rng.gen_range(-0.01..0.01);
         }
+        // the lumped masses of the triangles, density 1.5 (energy::mass)
+        let mut mass = vec![0.0; m * m];
+        for t in &tris {
+            let p = |v: usize| (xr[2 * v], xr[2 * v + 1]);
+            let ((ax, ay), (bx, by), (cx, cy)) = (p(t[0]), p(t[1]), p(t[2]));
+            let area = 0.5 * ((bx - ax) * (cy - ay) - (cx - ax) * (by - ay)).abs();
+            for &v in t {
+                mass[v] += 1.5 * area / 3.0;
+            }
+        }
         let total = TotalEnergy {
             terms: vec![
                 Box::new(NeoHookean2d::new(tris.clone(), &xr, 1.0, 3.0)),
                 Box::new(MembraneEnergy::new(edges, &xr, 2.0)),
-                Box::new(Gravity::lumped_triangles(
-                    m * m,
-                    &tris,
-                    &xr,
-                    1.5,
-                    [0.0, -9.81],
-                )),
+                Box::new(Gravity::new(mass, [0.0, -9.81])),
                 Box::new(GasEnergy::new(boundary, 0.7, &xr)),
             ],
         };

@@ -30,7 +30,8 @@
 //! per-vertex contribution scatter-added in polygon order, the Hessian triplets are produced in
 //! chunks in shoelace-term order; all bit-identical for any thread count.
 
-use super::{chunked_sum, par_scatter, Energy, Hessian, TermKind};
+use super::gas::area::{polygon_xy as xy, shoelace_sum};
+use super::{par_scatter, Energy, Hessian, TermKind};
 
 const DIM: usize = 2;
 
@@ -60,26 +61,9 @@ impl PressureEnergy {
     }
 }
 
-/// Position of the `i`-th polygon vertex (index mod the polygon length).
-#[inline]
-fn xy(polygon: &[usize], x: &[f64], i: usize) -> (f64, f64) {
-    let v = polygon[i % polygon.len()];
-    (x[DIM * v], x[DIM * v + 1])
-}
-
-/// Shoelace area of `polygon` at `x` (chunked sum: thread-count independent).
+/// Shoelace area of `polygon` at `x` (the gas's sum, [`super::gas::area`]).
 fn signed_area(polygon: &[usize], x: &[f64]) -> f64 {
-    let n = polygon.len();
-    let s = chunked_sum(n, |r| {
-        let mut s = 0.0;
-        for i in r {
-            let (xi, yi) = xy(polygon, x, i);
-            let (xj, yj) = xy(polygon, x, i + 1);
-            s += xi * yj - xj * yi;
-        }
-        s
-    });
-    0.5 * s
+    0.5 * shoelace_sum(polygon, x)
 }
 
 impl Energy for PressureEnergy {

@@ -27,8 +27,14 @@ use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
 
+// The field docs are the command line's help texts (clap prints them as written), not
+// rustdoc: `[dynamics]` names a scene-file table and `<scene>` a placeholder.
 #[derive(clap::Args, Clone)]
-#[allow(missing_docs)]
+#[allow(
+    missing_docs,
+    rustdoc::broken_intra_doc_links,
+    rustdoc::invalid_html_tags
+)]
 pub struct RunArgs {
     /// Scene name: balloons, ring (2D); sheets, rod, solids, balloons3d (3D); with --dynamic
     /// also drop, collide (2D), drop3d (3D); or a scene file `path/to/scene.toml` (docs/scene-files.md), whose `[solver]` settings apply unless the corresponding flag is given.

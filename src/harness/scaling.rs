@@ -139,7 +139,7 @@ pub fn case_cmd(a: CaseArgs) -> Result<()> {
         "vertices": scene.mesh.nv(),
         "pruning": pruning.as_str(),
         "kind": if a.max_outer == 1 { "one_step" } else { "full" },
-        "trust_delta0": a.trust_delta0,
+        "trust_delta0": delta0_cell(a.trust_delta0),
         "max_inner": a.max_inner,
         "status": status,
         "outer_iterations": res.outer_iterations,
@@ -190,15 +190,26 @@ fn write_rows(path: &Path, rows: &[ScalingRow]) -> Result<()> {
     Ok(())
 }
 
-/// A row's key: `(n, pruning, kind, trust_delta0, max_inner)` (the last two as written).
+/// The `trust_delta0` cell of δ0: Rust's shortest form of the number (`1`, `0.25`), the form
+/// of the committed CSV and of the resume key.
+fn delta0_cell(delta0: f64) -> String {
+    delta0.to_string()
+}
+
+/// A row's key: `(n, pruning, kind, trust_delta0, max_inner)`; `trust_delta0` as a number
+/// (rows written as `1.0` by earlier binaries match δ0 = 1), `max_inner` as written.
 type Key = (usize, String, String, String, String);
 
 fn key(r: &ScalingRow) -> Key {
+    let delta0 = r
+        .trust_delta0
+        .parse()
+        .map_or_else(|_| r.trust_delta0.clone(), delta0_cell);
     (
         r.n.parse().unwrap_or(0),
         r.pruning.clone(),
         r.kind.clone(),
-        r.trust_delta0.clone(),
+        delta0,
         r.max_inner.clone(),
     )
 }
@@ -232,7 +243,7 @@ fn run_case(a: &ScalingArgs, n: usize, mode: &str, max_outer: usize) -> Result<S
         vertices: String::new(),
         pruning: mode.to_string(),
         kind: if max_outer == 1 { "one_step" } else { "full" }.to_string(),
-        trust_delta0: a.trust_delta0.to_string(),
+        trust_delta0: delta0_cell(a.trust_delta0),
         max_inner: a.max_inner.to_string(),
         status,
         wall_time_s: format!("{:.1}", start.elapsed().as_secs_f64()),
@@ -329,7 +340,7 @@ pub fn scaling_cmd(a: ScalingArgs) -> Result<()> {
             n,
             m.clone(),
             kind.to_string(),
-            a.trust_delta0.to_string(),
+            delta0_cell(a.trust_delta0),
             a.max_inner.to_string(),
         );
         if rows.iter().any(|r| key(r) == k) {

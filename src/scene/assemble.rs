@@ -15,7 +15,8 @@
 //! body by body in file order, welded vertices merged; a built-in scene: its own numbering),
 //! and [`assemble_mesh`] takes the order in which the bodies' elements enter the global
 //! lists (`edges`, `triangles`, `faces`, `tets`). [`file_order`] is the default, body by body
-//! in the order given; the bodies themselves are always listed in the order given.
+//! in the order given; the bodies themselves are always listed in the order given. The
+//! energy of the assembled bodies is made by the one energy assembler, [`super::physics`].
 
 use crate::scene::file::topology::{boundary_edges, boundary_faces};
 use crate::scene::mesh::{Body, BodyKind, Mesh};

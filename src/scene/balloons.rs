@@ -11,9 +11,9 @@
 //! opposite pairs are (0, 2) and (1, 3).
 
 use super::Scene;
-use crate::energy::{GasEnergy, MembraneEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, BodyPart};
 use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::physics::{assemble_energy, BodyPhysics, Material, Physics, TermError};
 use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
@@ -61,6 +61,9 @@ pub enum BalloonsError {
         /// Why.
         reason: &'static str,
     },
+    /// An energy term that cannot be built.
+    #[error("balloons: {0}")]
+    Energy(#[from] TermError),
 }
 
 impl BalloonsParams {
@@ -171,7 +174,6 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
         edges: None,
         faces: None,
     };
-    let mut energy = TotalEnergy::default();
     let mut parts = Vec::new();
     for k in 0..4 {
         // Membrane vertices from the support's left end to its right end (in wall frame).
@@ -202,19 +204,22 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
         });
     }
     parts.push(box_part);
-    for (k, part) in parts[..4].iter().enumerate() {
-        let medges: Vec<[usize; 2]> = part.elements.iter().map(|e| [e[0], e[1]]).collect();
-        energy
-            .terms
-            .push(Box::new(MembraneEnergy::new(medges, &x_ref, p.mu)));
-        energy.terms.push(Box::new(GasEnergy::new(
-            part.vertices.clone(),
-            p.c * (1.0 + p.perturb[k]),
-            &x0,
-        )));
-    }
     // The box (body 4) was numbered first: its edges come first too.
     let mesh = assemble_mesh(2, x_ref, fixed, &parts, &[4, 0, 1, 2, 3]);
+    // Each balloon: the membrane, then the gas between it and its support; the box: nothing.
+    let balloon = |k: usize| BodyPhysics {
+        material: Some(Material::String { mu: p.mu }),
+        gas: Some(p.c * (1.0 + p.perturb[k])),
+        ..Default::default()
+    };
+    let physics = Physics {
+        bodies: (0..4)
+            .map(balloon)
+            .chain([BodyPhysics::default()])
+            .collect(),
+        ..Default::default()
+    };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(Scene {
         name: "balloons".into(),
         mesh,

@@ -17,8 +17,8 @@
 //! free of energy until contact). The glued triangle keeps its reference shape; the rest of
 //! the balloon grows around it.
 //!
-//! **Energy.** Per balloon, the St Venant–Kirchhoff membrane ([`Membrane3dEnergy`],
-//! `W = μ|E|² + λ/2 (tr E)²` per unit reference area) and the gas ([`Gas3dEnergy`],
+//! **Energy.** Per balloon, the St Venant–Kirchhoff membrane ([`crate::energy::Membrane3dEnergy`],
+//! `W = μ|E|² + λ/2 (tr E)²` per unit reference area) and the gas ([`crate::energy::Gas3dEnergy`],
 //! `−C ln V`, `V` the volume enclosed by the balloon's closed outward surface).
 //!
 //! **Defaults.** `n = 1` (42 vertices, 120 edges, 80 triangles per balloon; 12, 30, 20 for the
@@ -38,9 +38,9 @@
 use super::sheets::unique_edges;
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
-use crate::energy::{Gas3dEnergy, Membrane3dEnergy, OpenSurface, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::physics::{assemble_energy, BodyPhysics, Material, Physics, TermError};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use nalgebra::{Rotation3, Vector3};
 use std::collections::HashMap;
@@ -118,9 +118,9 @@ pub enum Balloons3dError {
     /// The generated mesh is invalid.
     #[error("balloons3d: invalid mesh: {0}")]
     Mesh(#[from] MeshError),
-    /// A balloon surface is not closed (a bug).
+    /// An energy term that cannot be built (a balloon surface that is not closed: a bug).
     #[error("balloons3d: {0}")]
-    Gas(#[from] OpenSurface),
+    Energy(#[from] TermError),
 }
 
 /// The unit icosphere: the icosahedron subdivided `level` times (each triangle into four,
@@ -421,18 +421,20 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
             eps,
         });
     }
-    let mut energy = TotalEnergy::default();
-    for tris in bodies_tris.iter().take(2) {
-        energy.terms.push(Box::new(Membrane3dEnergy::new(
-            tris.clone(),
-            &x,
-            p.mu,
-            p.lambda,
-        )));
-        energy
-            .terms
-            .push(Box::new(Gas3dEnergy::new(tris.clone(), p.c, &x)?));
-    }
+    // each balloon: its membrane, then its gas; the box: nothing
+    let balloon = BodyPhysics {
+        material: Some(Material::StvkMembrane {
+            mu: p.mu,
+            lambda: p.lambda,
+        }),
+        gas: Some(p.c),
+        ..Default::default()
+    };
+    let physics = Physics {
+        bodies: vec![balloon.clone(), balloon, BodyPhysics::default()],
+        ..Default::default()
+    };
+    let energy = assemble_energy(&mesh, &x, &physics)?;
     Ok(Scene {
         name: "balloons3d".into(),
         mesh,
@@ -496,6 +498,7 @@ impl LevelScene for Balloons3d {
 mod tests {
     use super::*;
     use crate::contact::p3;
+    use crate::energy::Gas3dEnergy;
 
     #[test]
     fn balloons3d_icosphere_counts() {

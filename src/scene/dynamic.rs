@@ -18,9 +18,11 @@
 //! and `ε = h/10` by default, `h` the largest reference edge of the moving bodies.
 
 use super::Scene;
-use crate::energy::{Gravity, Membrane3dEnergy, NeoHookean2d, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::physics::{
+    assemble_energy, BodyPhysics, ElasticTerms, Material, Physics, TermError,
+};
 use crate::scene::registry::{count, set_fields, BuiltinScene, Params};
 use thiserror::Error;
 
@@ -57,11 +59,9 @@ pub enum DynamicSceneError {
     /// The generated mesh is invalid.
     #[error("invalid mesh: {0}")]
     Mesh(#[from] MeshError),
-}
-
-/// A 2D solid's triangles (its elements).
-fn triangles(part: &BodyPart) -> Vec<[usize; 3]> {
-    part.elements.iter().map(|e| [e[0], e[1], e[2]]).collect()
+    /// An energy term that cannot be built.
+    #[error("{0}")]
+    Energy(#[from] TermError),
 }
 
 fn positive(scene: &'static str, name: &'static str, v: f64) -> Result<(), DynamicSceneError> {
@@ -155,6 +155,14 @@ impl RingSolid {
     /// counter-clockwise) and its contact edges, the inner circle then the outer. Vertex
     /// `k·n + j` of the ring is on layer k (radius `inner + k (radius − inner)/layers`) at
     /// angle `2π(j + offset_cells)/n`.
+    /// Its material (neo-Hookean, μ and λ).
+    fn material(&self) -> Material {
+        Material::NeoHookean {
+            mu: self.mu,
+            lambda: self.lambda,
+        }
+    }
+
     fn append(
         &self,
         x_ref: &mut Vec<f64>,
@@ -291,7 +299,6 @@ pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
         [0.0, p.ring.radius + p.height],
         0.0,
     );
-    let tris = triangles(&ring);
     let base = fixed.len();
     let nf = p.floor_edges;
     for i in 0..=nf {
@@ -312,20 +319,25 @@ pub fn drop(p: &DropParams) -> Result<DynamicScene, DynamicSceneError> {
     let mesh = assemble_mesh(2, x_ref, fixed, &[ring, floor], &file_order(2));
     mesh.validate()?;
     let density = vec![p.density, 0.0];
-    let mass = crate::energy::mass::lumped_mass(&mesh, &mesh.x_ref, &density)
-        .expect("one density per body, all finite");
-    let energy = TotalEnergy {
-        terms: vec![
-            Box::new(NeoHookean2d::new(
-                tris,
-                &mesh.x_ref,
-                p.ring.mu,
-                p.ring.lambda,
-            )),
-            Box::new(Gravity::new(mass, [0.0, -p.g])),
+    // the ring's material, then gravity on the lumped masses of both densities (the floor's
+    // is 0)
+    let physics = Physics {
+        bodies: vec![
+            BodyPhysics {
+                material: Some(p.ring.material()),
+                density: Some(density[0]),
+                ..Default::default()
+            },
+            BodyPhysics {
+                density: Some(density[1]),
+                ..Default::default()
+            },
         ],
+        gravity: Some(vec![0.0, -p.g]),
+        ..Default::default()
     };
     let x0 = mesh.x_ref.clone();
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     let v0 = vec![0.0; x0.len()];
     Ok(DynamicScene {
         scene: Scene {
@@ -420,8 +432,6 @@ pub fn collide(p: &CollideParams) -> Result<DynamicScene, DynamicSceneError> {
     let right = p
         .ring
         .append(&mut x_ref, &mut fixed, "right", [c, 0.0], p.offset_cells);
-    let mut tris = triangles(&left);
-    tris.extend(triangles(&right));
     let mesh = assemble_mesh(2, x_ref, fixed, &[left, right], &file_order(2));
     mesh.validate()?;
     let x0 = mesh.x_ref.clone();
@@ -429,14 +439,17 @@ pub fn collide(p: &CollideParams) -> Result<DynamicScene, DynamicSceneError> {
     for v in 0..mesh.nv() {
         v0[2 * v] = if v < nv_ring { p.speed } else { -p.speed };
     }
-    let energy = TotalEnergy {
-        terms: vec![Box::new(NeoHookean2d::new(
-            tris,
-            &mesh.x_ref,
-            p.ring.mu,
-            p.ring.lambda,
-        ))],
+    // one neo-Hookean term over both rings (the form the committed runs were made in)
+    let ring = BodyPhysics {
+        material: Some(p.ring.material()),
+        ..Default::default()
     };
+    let physics = Physics {
+        bodies: vec![ring.clone(), ring],
+        gravity: None,
+        elastic: ElasticTerms::Joined,
+    };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(DynamicScene {
         scene: Scene {
             name: S.into(),
@@ -613,14 +626,23 @@ pub fn drop3d(p: &Drop3dParams) -> Result<DynamicScene, DynamicSceneError> {
     let mesh = assemble_mesh(3, x.clone(), fixed, &parts, &file_order(2));
     mesh.validate()?;
     let density = vec![0.0, p.density];
-    let mut gravity = Gravity::<3>::new(vec![0.0; no + ns], [0.0, 0.0, -p.g]);
-    gravity.add_triangles(&stris, &x, p.density);
-    let energy = TotalEnergy {
-        terms: vec![
-            Box::new(Membrane3dEnergy::new(stris, &x, p.mu, p.lambda)),
-            Box::new(gravity),
+    // the sheet's membrane, then gravity on its weight (the obstacle carries nothing)
+    let physics = Physics {
+        bodies: vec![
+            BodyPhysics::default(),
+            BodyPhysics {
+                material: Some(Material::StvkMembrane {
+                    mu: p.mu,
+                    lambda: p.lambda,
+                }),
+                density: Some(p.density),
+                ..Default::default()
+            },
         ],
+        gravity: Some(vec![0.0, 0.0, -p.g]),
+        ..Default::default()
     };
+    let energy = assemble_energy(&mesh, &x, &physics)?;
     let v0 = vec![0.0; x.len()];
     Ok(DynamicScene {
         scene: Scene {

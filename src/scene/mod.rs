@@ -1,7 +1,9 @@
 //! Scenes: a mesh, an energy, ε and an initial admissible configuration.
 //!
-//! A scene comes from a scene file ([`file`], docs/scene-files.md) or is built in: one module
-//! per built-in scene (docs/scenes.md), each listed once in [`registry::SCENES`].
+//! A scene comes from a scene file ([`mod@file`], docs/scene-files.md) or is built in: one module
+//! per built-in scene (docs/scenes.md), each listed once in [`registry::SCENES`]. Both go
+//! through the same two assemblers: [`assemble`] makes the mesh of their bodies, [`physics`]
+//! the energy of what the bodies carry (materials, gas, pressure, densities under gravity).
 //!
 //! # Where to add a scene
 //!
@@ -37,6 +39,7 @@ pub mod dynamic;
 pub mod file;
 pub mod mesh;
 pub mod meshio;
+pub mod physics;
 pub mod registry;
 pub mod ring;
 pub mod rod;

@@ -9,8 +9,8 @@
 //! J(φ) = Σ_edges ∫ W(φ̇) + p · A(φ),    W(F) = μ (|F|² − 1)² for |F| ≥ 1, 0 otherwise,
 //! ```
 //!
-//! the membrane energy of the balloons ([`MembraneEnergy`]) and the pressure term
-//! ([`PressureEnergy`], `A` the shoelace area enclosed by the ring): with `p > 0` it pulls the
+//! the membrane energy of the balloons ([`crate::energy::MembraneEnergy`]) and the pressure term
+//! ([`crate::energy::PressureEnergy`], `A` the shoelace area enclosed by the ring): with `p > 0` it pulls the
 //! ring inward. `ε = h/10` by default.
 //!
 //! Vertex `k` sits at the angle `θ_k = π + 2πk/n`: vertex 0 is the leftmost, `n/2` (n even)
@@ -33,9 +33,9 @@
 
 use super::Scene;
 use crate::contact::broad_phase::{min_distance_2d, point_edge_near, NearPair};
-use crate::energy::{MembraneEnergy, PressureEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, Mesh};
+use crate::scene::physics::{assemble_energy, BodyPhysics, Material, Physics, TermError};
 use crate::scene::registry::{BuiltinScene, Params};
 use thiserror::Error;
 
@@ -117,6 +117,9 @@ pub enum RingError {
         /// ε.
         eps: f64,
     },
+    /// An energy term that cannot be built.
+    #[error("ring: {0}")]
+    Energy(#[from] TermError),
 }
 
 /// Reference edge length `h = 2 sin(π/n)` of the ring with `n` edges (R = 1).
@@ -223,7 +226,7 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
         edges: None,
         faces: None,
     };
-    let mesh = assemble_mesh(2, x_ref.clone(), fixed, &[ring], &file_order(1));
+    let mesh = assemble_mesh(2, x_ref, fixed, &[ring], &file_order(1));
     let md = min_distance_2d(&mesh, &x0, 2.0 * eps, false);
     if md.distance < eps {
         return Err(RingError::InadmissibleStart {
@@ -234,12 +237,16 @@ pub fn build(p: &RingParams) -> Result<Scene, RingError> {
             eps,
         });
     }
-    let energy = TotalEnergy {
-        terms: vec![
-            Box::new(MembraneEnergy::new(edges, &x_ref, p.mu)),
-            Box::new(PressureEnergy::new((0..n).collect(), p.p, &x0)),
-        ],
+    // the membrane, then the pressure on the area it encloses (polygon 0, 1, …, n−1)
+    let physics = Physics {
+        bodies: vec![BodyPhysics {
+            material: Some(Material::String { mu: p.mu }),
+            pressure: Some(p.p),
+            ..Default::default()
+        }],
+        ..Default::default()
     };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(Scene {
         name: "ring".into(),
         mesh,
@@ -349,6 +356,7 @@ impl BuiltinScene for Ring {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::PressureEnergy;
 
     #[test]
     fn ring_geometry_and_energy() {

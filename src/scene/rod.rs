@@ -30,8 +30,8 @@
 //! edge (the middle edges of both strands cross at right angles at the minimum).
 //!
 //! **Energy.** `J = Σ_edges L_e W(F_e) + weight · Σ_v m_v z_v`: the tension-only string
-//! energy ([`String3dEnergy`], `W(F) = μ(|F|² − 1)²` for `|F| ≥ 1`) and gravity
-//! ([`Gravity`], `weight` = ρg per unit reference length, along −z) on the whole string.
+//! energy ([`crate::energy::String3dEnergy`], `W(F) = μ(|F|² − 1)²` for `|F| ≥ 1`) and gravity
+//! ([`crate::energy::Gravity`], `weight` = ρg per unit reference length, along −z) on the whole string.
 //!
 //! **Defaults.** `n = 2` (17 + 12 + 17 edges, 47 vertices), `μ = 1`, `weight = 0.1`,
 //! `H = 0.3`, `stretch = 1.1`, `slack = 1.2`, `swing_deg = 75`; `h` = the largest reference
@@ -50,9 +50,9 @@
 
 use super::Scene;
 use crate::contact::broad_phase::min_distance_3d;
-use crate::energy::{Gravity, String3dEnergy, TotalEnergy};
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
 use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::physics::{assemble_energy, BodyPhysics, Material, Physics, TermError};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use thiserror::Error;
 
@@ -135,6 +135,9 @@ pub enum RodError {
     /// The generated mesh is invalid.
     #[error("rod: invalid mesh: {0}")]
     Mesh(#[from] MeshError),
+    /// An energy term that cannot be built.
+    #[error("rod: {0}")]
+    Energy(#[from] TermError),
 }
 
 /// Edges of each strand at level `n` (odd).
@@ -333,7 +336,7 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
         edges: None,
         faces: None,
     };
-    let mesh = assemble_mesh(3, x_ref.clone(), fixed, &[rod], &file_order(1));
+    let mesh = assemble_mesh(3, x_ref, fixed, &[rod], &file_order(1));
     mesh.validate()?;
     let (distance, pair) = min_distance_3d(&mesh, &x0, eps);
     if distance < eps {
@@ -345,14 +348,17 @@ pub fn build(p: &RodParams) -> Result<Scene, RodError> {
             eps,
         });
     }
-    let mut gravity = Gravity::<3>::new(vec![0.0; nv], [0.0, 0.0, -1.0]);
-    gravity.add_edges(&edges, &x_ref, p.weight);
-    let energy = TotalEnergy {
-        terms: vec![
-            Box::new(String3dEnergy::new(edges, &x_ref, p.mu)),
-            Box::new(gravity),
-        ],
+    // the string, then gravity on its weight per unit length along −z
+    let physics = Physics {
+        bodies: vec![BodyPhysics {
+            material: Some(Material::String { mu: p.mu }),
+            density: Some(p.weight),
+            ..Default::default()
+        }],
+        gravity: Some(vec![0.0, 0.0, -1.0]),
+        ..Default::default()
     };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(Scene {
         name: "rod".into(),
         mesh,

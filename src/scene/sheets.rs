@@ -1,7 +1,7 @@
 //! Two sheets: an upper membrane pressed by its weight onto a lower one (3D contact between
 //! two surfaces: vertex–triangle AND edge–edge pairs together).
 //!
-//! **Geometry.** Two square St Venant–Kirchhoff membranes ([`Membrane3dEnergy`]), each an
+//! **Geometry.** Two square St Venant–Kirchhoff membranes ([`crate::energy::Membrane3dEnergy`]), each an
 //! `m × m` grid of squares (`m = 4n`), every square cut by the diagonal from its low-x low-y
 //! corner into two triangles; every triangle is a contact face, every grid edge and diagonal a
 //! contact edge (`BodyKind::Surface`).
@@ -19,7 +19,7 @@
 //!   sheet's interior.
 //!
 //! **Energy.** `J = Σ_sheets Σ_T |T_ref| W(F_T) + weight · Σ_{v ∈ upper} m_v z_v`, the StVK
-//! membrane `W = μ|E|² + λ/2 (tr E)²` on both sheets and gravity ([`Gravity`], lumped
+//! membrane `W = μ|E|² + λ/2 (tr E)²` on both sheets and gravity ([`crate::energy::Gravity`], lumped
 //! masses, `weight` = ρg per unit REFERENCE area, pointing to −z) on the upper sheet only.
 //! The pre-tension gives both sheets an out-of-plane stiffness at `x0` (a flat unstretched
 //! membrane has none: its Hessian would be singular in z and the linearized problem unbounded
@@ -50,8 +50,8 @@
 
 use super::stacked::{self, Block, StackError};
 use super::Scene;
-use crate::energy::{Gravity, Membrane3dEnergy, TotalEnergy};
 use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::physics::{assemble_energy, BodyPhysics, Material, Physics, TermError};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use thiserror::Error;
 
@@ -130,6 +130,9 @@ pub enum SheetsError {
     /// The generated mesh is invalid (a bug, or parameters that degenerate it).
     #[error("sheets: invalid mesh: {0}")]
     Mesh(#[from] MeshError),
+    /// An energy term that cannot be built.
+    #[error("sheets: {0}")]
+    Energy(#[from] TermError),
 }
 
 impl From<StackError> for SheetsError {
@@ -301,31 +304,29 @@ pub fn build(p: &SheetsParams) -> Result<Scene, SheetsError> {
             2.0 * p.half_size * sq2 / (m as f64 * p.stretch_upper),
         ),
     ];
-    let mesh = stacked::assemble(
-        BodyKind::Surface,
-        3,
-        np,
-        blocks,
-        x_ref.clone(),
-        fixed,
-        &x0,
-        eps,
-    )?;
-    let mut energy = TotalEnergy::default();
-    if !p.lower_fixed {
-        energy.terms.push(Box::new(Membrane3dEnergy::new(
-            lower_tris, &x_ref, p.mu, p.lambda,
-        )));
-    }
-    energy.terms.push(Box::new(Membrane3dEnergy::new(
-        upper_tris.clone(),
-        &x_ref,
-        p.mu,
-        p.lambda,
-    )));
-    let mut gravity = Gravity::<3>::new(vec![0.0; 2 * np], [0.0, 0.0, -1.0]);
-    gravity.add_triangles(&upper_tris, &x_ref, p.weight);
-    energy.terms.push(Box::new(gravity));
+    let mesh = stacked::assemble(BodyKind::Surface, 3, np, blocks, x_ref, fixed, &x0, eps)?;
+    // both membranes (the lower one only when it deforms), then gravity on the upper one's
+    // weight per unit area along −z
+    let membrane = Material::StvkMembrane {
+        mu: p.mu,
+        lambda: p.lambda,
+    };
+    let physics = Physics {
+        bodies: vec![
+            BodyPhysics {
+                material: (!p.lower_fixed).then_some(membrane),
+                ..Default::default()
+            },
+            BodyPhysics {
+                material: Some(membrane),
+                density: Some(p.weight),
+                ..Default::default()
+            },
+        ],
+        gravity: Some(vec![0.0, 0.0, -1.0]),
+        ..Default::default()
+    };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(Scene {
         name: "sheets".into(),
         mesh,

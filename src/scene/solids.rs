@@ -19,7 +19,7 @@
 //!   block. The rotated footprint must lie inside the lower block's top face
 //!   (`s (|cos θ| + |sin θ|) < 1`).
 //!
-//! **Energy.** The compressible neo-Hookean energy ([`NeoHookean3d`],
+//! **Energy.** The compressible neo-Hookean energy ([`crate::energy::NeoHookean3d`],
 //! `W = μ/2 (|F|² − 3) − μ ln J + λ/2 (ln J)²`) on both blocks, no gravity.
 //!
 //! **Defaults.** `n = 3` (per block 64 vertices, 8 of them interior, 162 tets, 108 faces,
@@ -38,8 +38,10 @@
 use super::sheets::unique_edges;
 use super::stacked::{self, Block, StackError};
 use super::Scene;
-use crate::energy::{DegenerateTet, NeoHookean3d, TotalEnergy};
 use crate::scene::mesh::{BodyKind, MeshError};
+use crate::scene::physics::{
+    assemble_energy, BodyPhysics, ElasticTerms, Material, Physics, TermError,
+};
 use crate::scene::registry::{set_fields, LevelScene, Params};
 use nalgebra::Vector3;
 use std::collections::HashMap;
@@ -115,9 +117,9 @@ pub enum SolidsError {
     /// The generated mesh is invalid.
     #[error("solids: invalid mesh: {0}")]
     Mesh(#[from] MeshError),
-    /// A generated tetrahedron is degenerate.
+    /// An energy term that cannot be built (a generated tetrahedron is degenerate).
     #[error("solids: {0}")]
-    Tet(#[from] DegenerateTet),
+    Energy(#[from] TermError),
 }
 
 impl From<StackError> for SolidsError {
@@ -311,32 +313,26 @@ pub fn build(p: &SolidsParams) -> Result<Scene, SolidsError> {
         block(0, lower_faces, 3f64.sqrt() / m as f64),
         block(1, upper_faces, 3f64.sqrt() * s / m as f64),
     ];
-    let mesh = stacked::assemble(
-        BodyKind::Solid,
-        4,
-        np,
-        blocks,
-        x_ref.clone(),
-        fixed,
-        &x0,
-        eps,
-    )?;
+    let mesh = stacked::assemble(BodyKind::Solid, 4, np, blocks, x_ref, fixed, &x0, eps)?;
     // One term over both blocks when they are alike (the sums of the committed results), one
     // per block otherwise.
-    let energy = if p.contrast == 1.0 {
-        TotalEnergy {
-            terms: vec![Box::new(NeoHookean3d::new(tets, &x_ref, p.mu, p.lambda)?)],
-        }
-    } else {
-        let (lower, upper) = tets.split_at(nt);
-        let (mu_u, lambda_u) = (p.contrast * p.mu, p.contrast * p.lambda);
-        TotalEnergy {
-            terms: vec![
-                Box::new(NeoHookean3d::new(lower.to_vec(), &x_ref, p.mu, p.lambda)?),
-                Box::new(NeoHookean3d::new(upper.to_vec(), &x_ref, mu_u, lambda_u)?),
-            ],
-        }
+    let solid = |c: f64| BodyPhysics {
+        material: Some(Material::NeoHookean {
+            mu: c * p.mu,
+            lambda: c * p.lambda,
+        }),
+        ..Default::default()
     };
+    let physics = Physics {
+        bodies: vec![solid(1.0), solid(p.contrast)],
+        gravity: None,
+        elastic: if p.contrast == 1.0 {
+            ElasticTerms::Joined
+        } else {
+            ElasticTerms::PerBody
+        },
+    };
+    let energy = assemble_energy(&mesh, &x0, &physics)?;
     Ok(Scene {
         name: "solids".into(),
         mesh,

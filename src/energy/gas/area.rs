@@ -44,23 +44,12 @@ impl ClosedPolygon {
     }
 
     fn xy(&self, x: &[f64], i: usize) -> (f64, f64) {
-        let v = self.polygon[i % self.polygon.len()];
-        (x[DIM * v], x[DIM * v + 1])
+        polygon_xy(&self.polygon, x, i)
     }
 
     /// Signed area `V(x)` (positive in the reference orientation).
     pub fn area(&self, x: &[f64]) -> f64 {
-        let n = self.polygon.len();
-        let s = chunked_sum(n, |r| {
-            let mut s = 0.0;
-            for i in r {
-                let (xi, yi) = self.xy(x, i);
-                let (xj, yj) = self.xy(x, i + 1);
-                s += xi * yj - xj * yi;
-            }
-            s
-        });
-        self.sign * 0.5 * s
+        self.sign * 0.5 * shoelace_sum(&self.polygon, x)
     }
 
     /// `∇V(x)` as sparse `(dof, value)` pairs, in polygon order (duplicates summed into the
@@ -101,6 +90,28 @@ impl ClosedPolygon {
         }
         w
     }
+}
+
+/// Position of the `i`-th vertex of a closed `polygon` (index mod its length).
+#[inline]
+pub(crate) fn polygon_xy(polygon: &[usize], x: &[f64], i: usize) -> (f64, f64) {
+    let v = polygon[i % polygon.len()];
+    (x[DIM * v], x[DIM * v + 1])
+}
+
+/// `Σ_{i=0}^{n−1} (x_i y_{i+1} − x_{i+1} y_i)` (indices mod n) over a closed `polygon`: twice
+/// its signed area. A chunked sum (thread-count independent); shared by the gas and pressure
+/// terms.
+pub(crate) fn shoelace_sum(polygon: &[usize], x: &[f64]) -> f64 {
+    chunked_sum(polygon.len(), |r| {
+        let mut s = 0.0;
+        for i in r {
+            let (xi, yi) = polygon_xy(polygon, x, i);
+            let (xj, yj) = polygon_xy(polygon, x, i + 1);
+            s += xi * yj - xj * yi;
+        }
+        s
+    })
 }
 
 /// Whether some vertex occurs more than once in `polygon`.

@@ -1,6 +1,6 @@
-//! Hand-written SVG figures, one file per thing drawn: 2D shapes ([`shapes`]), 3D
-//! configurations in an isometric projection ([`projection`]) and the energy history
-//! ([`energy`]: `J` against the outer iteration, plus, when meaningful, a log-scale panel of
+//! Hand-written SVG figures, one file per thing drawn: 2D shapes (`shapes.rs`), 3D
+//! configurations in an isometric projection (`projection.rs`) and the energy history
+//! (`energy.rs`: `J` against the outer iteration, plus, when meaningful, a log-scale panel of
 //! `J − J_final`). This file holds the page layout and the primitives they share.
 //!
 //! 2D runs use [`shapes_and_energy_svg`]; 3D runs use [`projection_svg`].

@@ -1,22 +1,22 @@
 //! Assembly of a scene file: the loaded bodies become one [`Mesh`] (vertices numbered body by
-//! body, welded vertices merged; each body's contact edges and faces) and one energy
-//! `J = Σ_bodies (material + gas + pressure) + gravity` (docs/method.md, docs/scene-files.md),
-//! then the assembled scene is checked: the contact filter, boundedness under gravity, ε
-//! against the rest shapes, the admissibility of the start, and the initial velocities.
+//! body, welded vertices merged; each body's contact edges and faces) through the mesh
+//! assembler of every scene ([`crate::scene::assemble`]) and one energy
+//! `J = Σ_bodies (material + gas + pressure) + gravity` (docs/method.md, docs/scene-files.md)
+//! through its energy assembler ([`crate::scene::physics`]), each key checked, with its line,
+//! just before the step that uses it; then the assembled scene is checked: the contact filter,
+//! boundedness under gravity, ε against the rest shapes, the admissibility of the start, and
+//! the initial velocities.
 
 use super::contact::describe;
 use super::schema::{
-    BodySpec, ContactSpec, DynamicsSpec, GasSpec, MaterialSpec, PressureSpec, SolverSpec, WeldSpec,
+    BodySpec, ContactSpec, DynamicsSpec, GasSpec, MaterialSpec, SolverSpec, WeldSpec,
 };
-use super::topology::chain;
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
-use crate::energy::{
-    Energy, Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy, NeoHookean2d,
-    NeoHookean3d, PressureEnergy, String3dEnergy, TotalEnergy,
-};
+use crate::energy::TotalEnergy;
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
-use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
+use crate::scene::mesh::{Body, ContactFilter, Mesh};
+use crate::scene::physics::{EnergyAssembler, Material};
 use crate::scene::Scene;
 use std::path::Path;
 use toml::Spanned;
@@ -41,13 +41,6 @@ pub(super) struct Header {
     pub(super) solver: SolverSpec,
     /// `[dynamics]`.
     pub(super) dynamics: DynamicsSpec,
-}
-
-/// Gravity's accumulators while the bodies' terms are built: lumped masses (2D) and the 3D
-/// load.
-struct Loads {
-    mass: Vec<f64>,
-    gravity3: Gravity<3>,
 }
 
 impl Ctx<'_> {
@@ -75,14 +68,12 @@ impl Ctx<'_> {
         let (x_ref, fixed, x0) = place_vertices(dim, &loaded, &global);
         let parts = body_parts(&loaded, &global);
         let mut mesh = assemble_mesh(dim, x_ref, fixed, &parts, &file_order(nb));
-        let body_elements: Vec<Vec<[usize; 4]>> = parts.into_iter().map(|p| p.elements).collect();
         let (h, body_all_fixed) = mesh_size(&mesh);
         let energy = self.energy_terms(
             &mesh,
             &x0,
             &loaded,
             &specs,
-            &body_elements,
             &body_all_fixed,
             gravity.as_ref(),
         )?;
@@ -123,76 +114,61 @@ impl Ctx<'_> {
         })
     }
 
-    /// The energy terms, body by body: material, then gas, then pressure; gravity last.
-    #[allow(clippy::too_many_arguments)]
+    /// The energy terms, body by body: material, then gas, then pressure; gravity last (the
+    /// order of [`crate::scene::physics::assemble_energy`]), each key checked before its step.
     fn energy_terms(
         &self,
         mesh: &Mesh,
         x0: &[f64],
         loaded: &[Loaded],
         specs: &[BodySpec],
-        body_elements: &[Vec<[usize; 4]>],
         body_all_fixed: &[bool],
         gravity: Option<&(Vec<f64>, usize)>,
     ) -> Result<TotalEnergy, SceneFileError> {
-        let dim = mesh.dim;
-        let mut energy = TotalEnergy::default();
-        let mut loads = Loads {
-            mass: vec![0.0; mesh.nv()],
-            gravity3: Gravity::<3>::new(vec![0.0; mesh.nv()], [0.0; 3]),
-        };
+        let mut terms = EnergyAssembler::new(mesh, x0);
         for (bi, (l, s)) in loaded.iter().zip(specs).enumerate() {
-            let els = &body_elements[bi];
             let all_fixed = body_all_fixed[bi];
             match &s.material {
                 None if all_fixed => {}
                 None => {
                     return Err(self.invalid(l.line, format!("{}.material", l.key), "(missing)", "a body with a free vertex needs a material (only a body with `fixed.all = true` may have none)"));
                 }
-                Some(m) => energy
-                    .terms
-                    .push(self.material_term(dim, l, m, els, &mesh.x_ref)?),
+                Some(m) => {
+                    let material = self.material(l, m)?;
+                    terms.material(&[bi], material).map_err(|e| {
+                        self.invalid(
+                            l.line,
+                            l.key.clone(),
+                            format!("{:?}", l.name),
+                            e.to_string(),
+                        )
+                    })?;
+                }
             }
             if let Some(g) = &s.gas {
-                energy.terms.push(self.gas_term(dim, l, g, els, x0)?);
+                self.gas_term(&mut terms, bi, mesh.dim, l, g)?;
             }
             if let Some(p) = &s.pressure {
-                energy.terms.push(self.pressure_term(dim, l, p, els, x0)?);
+                let pk = format!("{}.pressure.p", l.key);
+                if !p.p.is_finite() {
+                    return Err(self.invalid(l.line, pk, p.p, "must be finite"));
+                }
+                terms
+                    .pressure(bi, p.p)
+                    .map_err(|e| self.invalid(l.line, pk, p.p, e.to_string()))?;
             }
-            self.body_load(mesh, l, s, els, all_fixed, gravity, &mut loads)?;
+            self.body_load(&mut terms, bi, l, s, all_fixed, gravity)?;
         }
-        if let Some((g, _)) = gravity {
-            if dim == 3 {
-                let mut gravity3 = loads.gravity3;
-                gravity3.g = [g[0], g[1], g[2]];
-                energy.terms.push(Box::new(gravity3));
-            } else {
-                energy
-                    .terms
-                    .push(Box::new(Gravity::new(loads.mass, [g[0], g[1]])));
-            }
-        }
-        Ok(energy)
+        Ok(terms.finish(gravity.map(|(g, _)| g.as_slice())))
     }
 
-    /// A body's elastic term from its `material`: string (curves), St Venant–Kirchhoff
-    /// membrane (3D surfaces), neo-Hookean (solids).
-    fn material_term(
-        &self,
-        dim: usize,
-        l: &Loaded,
-        m: &MaterialSpec,
-        els: &[[usize; 4]],
-        x_ref: &[f64],
-    ) -> Result<Box<dyn Energy>, SceneFileError> {
-        let key = &l.key;
+    /// A body's `material`, checked: the model its kind takes (string for curves,
+    /// St Venant–Kirchhoff membrane for 3D surfaces, neo-Hookean for solids) and its
+    /// coefficients.
+    fn material(&self, l: &Loaded, m: &MaterialSpec) -> Result<Material, SceneFileError> {
         let line = l.line;
-        let mk = format!("{key}.material");
-        let expect = match (l.kind, dim) {
-            (BodyKind::Curve, _) => "string",
-            (BodyKind::Surface, _) => "stvk-membrane",
-            (BodyKind::Solid, _) => "neo-hookean",
-        };
+        let mk = format!("{}.material", l.key);
+        let expect = Material::model_for(l.kind);
         if m.model != expect {
             return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean for solids)", l.kind).to_lowercase()));
         }
@@ -224,106 +200,48 @@ impl Ctx<'_> {
                 "must be finite and ≥ 0",
             ));
         }
-        let edges: Vec<[usize; 2]> = els.iter().map(|e| [e[0], e[1]]).collect();
-        let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
-        Ok(match (l.kind, dim) {
-            (BodyKind::Curve, 2) => Box::new(MembraneEnergy::new(edges, x_ref, mu)),
-            (BodyKind::Curve, _) => Box::new(String3dEnergy::new(edges, x_ref, mu)),
-            (BodyKind::Surface, _) => Box::new(Membrane3dEnergy::new(tris, x_ref, mu, lambda)),
-            (BodyKind::Solid, 2) => Box::new(NeoHookean2d::new(tris, x_ref, mu, lambda)),
-            (BodyKind::Solid, _) => Box::new(
-                NeoHookean3d::new(els.to_vec(), x_ref, mu, lambda).map_err(|e| {
-                    self.invalid(line, key.clone(), format!("{:?}", l.name), e.to_string())
-                })?,
-            ),
-        })
+        Ok(Material::of_kind(l.kind, mu, lambda))
     }
 
     /// A body's `gas`: `−C ln V`, V the area of a 2D curve (closed, or closed by its chord)
     /// or the volume of a closed 3D surface, positive at the start.
     fn gas_term(
         &self,
+        terms: &mut EnergyAssembler,
+        bi: usize,
         dim: usize,
         l: &Loaded,
         g: &GasSpec,
-        els: &[[usize; 4]],
-        x0: &[f64],
-    ) -> Result<Box<dyn Energy>, SceneFileError> {
+    ) -> Result<(), SceneFileError> {
         let line = l.line;
         let gk = format!("{}.gas.c", l.key);
         if !(g.c > 0.0 && g.c.is_finite()) {
             return Err(self.invalid(line, gk, g.c, "must be finite and > 0"));
         }
-        match (l.kind, dim) {
-            (BodyKind::Curve, 2) => {
-                let poly = chain(els).map_err(|r| self.invalid(line, &gk, g.c, r))?;
-                let gas = GasEnergy::new(poly, g.c, x0);
-                if gas.measure(x0).is_nan() || gas.measure(x0) <= 0.0 {
-                    return Err(self.invalid(
-                        line,
-                        gk,
-                        g.c,
-                        "the curve encloses zero area in the initial configuration",
-                    ));
-                }
-                Ok(Box::new(gas))
-            }
-            (BodyKind::Surface, 3) => {
-                let tris: Vec<[usize; 3]> = els.iter().map(|e| [e[0], e[1], e[2]]).collect();
-                let gas = Gas3dEnergy::new(tris, g.c, x0)
-                    .map_err(|e| self.invalid(line, &gk, g.c, e.to_string()))?;
-                if gas.measure(x0).is_nan() || gas.measure(x0) <= 0.0 {
-                    return Err(self.invalid(
-                        line,
-                        gk,
-                        g.c,
-                        "the surface encloses zero volume in the initial configuration",
-                    ));
-                }
-                Ok(Box::new(gas))
-            }
-            _ => Err(self.invalid(
-                line,
-                gk,
-                g.c,
-                "a gas fills a 2D curve (closed, or closed by its chord) or a closed 3D surface",
-            )),
+        let v0 = terms
+            .gas(bi, g.c)
+            .map_err(|e| self.invalid(line, &gk, g.c, e.to_string()))?;
+        if v0.is_nan() || v0 <= 0.0 {
+            let what = if dim == 2 {
+                "the curve encloses zero area in the initial configuration"
+            } else {
+                "the surface encloses zero volume in the initial configuration"
+            };
+            return Err(self.invalid(line, gk, g.c, what));
         }
-    }
-
-    /// A body's `pressure`: `p·A`, A the signed area of a 2D curve.
-    fn pressure_term(
-        &self,
-        dim: usize,
-        l: &Loaded,
-        p: &PressureSpec,
-        els: &[[usize; 4]],
-        x0: &[f64],
-    ) -> Result<Box<dyn Energy>, SceneFileError> {
-        let line = l.line;
-        let pk = format!("{}.pressure.p", l.key);
-        if !p.p.is_finite() {
-            return Err(self.invalid(line, pk, p.p, "must be finite"));
-        }
-        if !(l.kind == BodyKind::Curve && dim == 2) {
-            return Err(self.invalid(line, pk, p.p, "a pressure acts on a 2D curve"));
-        }
-        let poly = chain(els).map_err(|r| self.invalid(line, &pk, p.p, r))?;
-        Ok(Box::new(PressureEnergy::new(poly, p.p, x0)))
+        Ok(())
     }
 
     /// A body's `density`: its lumped masses added to gravity's load. A free body under a
     /// non-zero gravity needs one.
-    #[allow(clippy::too_many_arguments)]
     fn body_load(
         &self,
-        mesh: &Mesh,
+        terms: &mut EnergyAssembler,
+        bi: usize,
         l: &Loaded,
         s: &BodySpec,
-        els: &[[usize; 4]],
         all_fixed: bool,
         gravity: Option<&(Vec<f64>, usize)>,
-        loads: &mut Loads,
     ) -> Result<(), SceneFileError> {
         let key = &l.key;
         if let Some(rho) = s.density {
@@ -335,41 +253,7 @@ impl Ctx<'_> {
                     "must be finite and ≥ 0",
                 ));
             }
-            if mesh.dim == 3 {
-                match l.kind {
-                    BodyKind::Curve => loads.gravity3.add_edges(
-                        &els.iter().map(|e| [e[0], e[1]]).collect::<Vec<_>>(),
-                        &mesh.x_ref,
-                        rho,
-                    ),
-                    BodyKind::Surface => loads.gravity3.add_triangles(
-                        &els.iter().map(|e| [e[0], e[1], e[2]]).collect::<Vec<_>>(),
-                        &mesh.x_ref,
-                        rho,
-                    ),
-                    BodyKind::Solid => loads.gravity3.add_tets(els, &mesh.x_ref, rho),
-                }
-            } else {
-                let g = match l.kind {
-                    BodyKind::Curve => Gravity::lumped_edges(
-                        mesh.nv(),
-                        &els.iter().map(|e| [e[0], e[1]]).collect::<Vec<_>>(),
-                        &mesh.x_ref,
-                        rho,
-                        [0.0; 2],
-                    ),
-                    _ => Gravity::lumped_triangles(
-                        mesh.nv(),
-                        &els.iter().map(|e| [e[0], e[1], e[2]]).collect::<Vec<_>>(),
-                        &mesh.x_ref,
-                        rho,
-                        [0.0; 2],
-                    ),
-                };
-                for (m, gm) in loads.mass.iter_mut().zip(&g.mass) {
-                    *m += gm;
-                }
-            }
+            terms.load(bi, rho);
         } else if let Some((g, gl)) = gravity.filter(|_| !all_fixed) {
             return Err(self.invalid(*gl, "gravity", fmt_list(g), format!("body {:?} ({key}) has a free vertex but no density: give {key}.density (0 for no load)", l.name)));
         }

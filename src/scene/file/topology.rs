@@ -48,9 +48,9 @@ pub(crate) fn boundary_faces(tets: &[[usize; 4]]) -> Vec<[usize; 3]> {
     out
 }
 
-/// The vertices of a curve in order along it: a simple path (closed by its chord) or a simple
-/// cycle.
-pub(super) fn chain(els: &[[usize; 4]]) -> Result<Vec<usize>, String> {
+/// The vertices of a curve (its edges `els`) in order along it: a simple path (closed by its
+/// chord) or a simple cycle.
+pub(crate) fn chain(els: &[[usize; 2]]) -> Result<Vec<usize>, String> {
     let mut adj: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for e in els {
         adj.entry(e[0]).or_default().push(e[1]);
@@ -97,7 +97,7 @@ mod tests {
 
     #[test]
     fn scenefile_chain_orders_paths_and_cycles() {
-        let c = |v: &[[usize; 2]]| chain(&v.iter().map(|e| [e[0], e[1], 0, 0]).collect::<Vec<_>>());
+        let c = |v: &[[usize; 2]]| chain(v);
         assert_eq!(
             c(&[[0, 1], [1, 2], [2, 3], [3, 0]]).unwrap(),
             vec![0, 1, 2, 3]
