@@ -26,8 +26,8 @@
 
 pub mod admissibility;
 pub mod broad_phase;
-pub mod continuous;
 pub mod bvh;
+pub mod continuous;
 pub mod distance;
 pub mod edge_edge;
 pub mod motion;

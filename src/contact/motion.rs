@@ -146,9 +146,13 @@ impl<const D: usize> MotionSearch<D> {
         phi: &[f64],
         thickness: f64,
     ) -> Vec<ContactPair> {
-        self.traverse(mesh, psi, phi, thickness, &|pair, out: &mut Vec<ContactPair>| {
-            out.push(pair)
-        })
+        self.traverse(
+            mesh,
+            psi,
+            phi,
+            thickness,
+            &|pair, out: &mut Vec<ContactPair>| out.push(pair),
+        )
     }
 
     /// The dual traversal: `emit(pair, out)` for every pair of disjoint contact elements with a

@@ -14,8 +14,8 @@ use crate::solve::dynamics::{
 };
 use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
-use crate::solve::sqp::OuterMethod;
 use crate::solve::settings::{tol_kappa, Accuracy};
+use crate::solve::sqp::OuterMethod;
 use anyhow::Result;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
 use std::time::Instant;

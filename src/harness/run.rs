@@ -158,8 +158,12 @@ fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
 }
 
 fn parse_outer_method(s: &str) -> Result<OuterMethod, String> {
-    OuterMethod::from_name(s)
-        .ok_or_else(|| format!("--outer-method {s:?}: expected one of {}", OuterMethod::names()))
+    OuterMethod::from_name(s).ok_or_else(|| {
+        format!(
+            "--outer-method {s:?}: expected one of {}",
+            OuterMethod::names()
+        )
+    })
 }
 
 fn parse_pruning(s: &str) -> Result<Pruning, String> {
@@ -199,8 +203,14 @@ struct Summary {
     eps: f64,
     backend: String,
     pruning: &'static str,
+    /// The outer method (`pantz`, `sqp`).
+    outer_method: &'static str,
     status: &'static str,
     outer_iterations: usize,
+    /// Outer steps that were SQP steps (0 for `pantz`).
+    sqp_steps: usize,
+    /// Outer steps where the SQP step collapsed and Pantz's step was taken (0 for `pantz`).
+    fallback_steps: usize,
     inner_iterations: usize,
     backend_iterations: usize,
     initial_energy: f64,
@@ -438,6 +448,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let qps = rs.qp_settings();
     let mut backend = backend_from_name(&rs.backend, &qps)?;
     let settings = rs.outer_settings();
+    let method = settings.method;
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
@@ -559,8 +570,11 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         eps: scene.eps,
         backend: rs.backend.clone(),
         pruning: settings.pruning.as_str(),
+        outer_method: method.as_str(),
         status: res.status.as_str(),
         outer_iterations: res.outer_iterations,
+        sqp_steps: res.sqp_steps,
+        fallback_steps: res.fallback_steps,
         inner_iterations: res.inner_iterations,
         backend_iterations: res.backend_iterations,
         initial_energy: energies[0].1,
@@ -583,10 +597,15 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{}: status {} after {} outer iterations, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        "{}: status {} after {} outer iterations{}, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
+        if method == OuterMethod::Sqp {
+            format!(" ({} sqp, {} pantz fallback)", res.sqp_steps, res.fallback_steps)
+        } else {
+            String::new()
+        },
         res.energy,
         res.certificate.kappa,
         state,

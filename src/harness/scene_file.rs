@@ -137,7 +137,11 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     {
         s.hessian_model = m;
     }
-    if let Some(m) = spec.outer_method.as_deref().and_then(OuterMethod::from_name) {
+    if let Some(m) = spec
+        .outer_method
+        .as_deref()
+        .and_then(OuterMethod::from_name)
+    {
         s.outer_method = m;
     }
     s.tol_j = spec.tol_j.or(s.tol_j);

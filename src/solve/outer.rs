@@ -634,7 +634,11 @@ impl StepContext<'_> {
         let mut s = sqp_step(&sctx, x, jx, &warm_mu, shift, backend)?;
         let (y, energy, md) = match s.accepted.take() {
             Some(a) => a,
-            None if s.stationary => (x.to_vec(), jx, min_distance(self.mesh, x, 2.0 * self.eps, true)),
+            None if s.stationary => (
+                x.to_vec(),
+                jx,
+                min_distance(self.mesh, x, 2.0 * self.eps, true),
+            ),
             None => return Ok((None, s)),
         };
         let sub = SubproblemResult {
@@ -660,6 +664,15 @@ impl StepContext<'_> {
         step.record.rejections = s.rejections;
         Ok((Some(step), s))
     }
+}
+
+/// Whether the outer loop keeps an SQP step `s` that produced a point (accepted, or `x` itself
+/// when stationary) and lowered J by `decrease`: always when `x` is stationary for the
+/// linearized problem or no safeguard cut the step; a step that a safeguard (the exact or
+/// the continuous check, a failed correction) cut and that lowered J by at most the stopping
+/// rule's `tol` is no evidence of a fixed point, and Pantz's step is taken instead.
+pub(crate) fn keep_sqp_step(s: &SqpStep, decrease: f64, tol: f64) -> bool {
+    s.stationary || !(s.limited && decrease <= tol)
 }
 
 /// A Pantz step taken because the SQP attempt `s` collapsed: the attempt's QP solves, backend
@@ -860,17 +873,13 @@ pub fn run_observed(
                 &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
             )?,
             OuterMethod::Sqp => {
-                let (step, attempt) = ctx.sqp(
-                    &x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend,
-                )?;
+                let (step, attempt) =
+                    ctx.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
                 // A step that a safeguard cut and that moved J by less than the stopping
                 // rule's tolerance is no evidence of a fixed point: take Pantz's step.
                 let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
                 match step {
-                    Some(st)
-                        if attempt.stationary
-                            || !(attempt.limited && jx - st.sub.energy <= tol) =>
-                    {
+                    Some(st) if keep_sqp_step(&attempt, jx - st.sub.energy, tol) => {
                         result.sqp_steps += 1;
                         st
                     }

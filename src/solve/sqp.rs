@@ -170,6 +170,28 @@ pub(crate) struct SqpStep {
     pub t_solve_s: f64,
 }
 
+impl SqpStep {
+    /// A step that took nothing yet.
+    pub(crate) fn empty() -> SqpStep {
+        SqpStep {
+            accepted: None,
+            stationary: false,
+            step_length: 0.0,
+            limited: false,
+            corrections: 0,
+            rejections: 0,
+            lazy_rounds: 0,
+            backend_iterations: 0,
+            qp_status: QpStatus::Solved,
+            rows: Vec::new(),
+            multipliers: Vec::new(),
+            t_pairs_s: 0.0,
+            t_assembly_s: 0.0,
+            t_solve_s: 0.0,
+        }
+    }
+}
+
 /// The linearized row of a pair: `Σ_i w_i · row_i(φ)`, its gradient on the free columns.
 fn linear_value(r: &PairRows, phi: &[f64]) -> f64 {
     let v = r.values(phi);
@@ -240,7 +262,13 @@ fn solve(
 fn add_free(x: &[f64], s: &[f64], col: &[usize], scale: f64) -> Vec<f64> {
     x.iter()
         .zip(col)
-        .map(|(&xi, &c)| if c == usize::MAX { xi } else { xi + scale * s[c] })
+        .map(|(&xi, &c)| {
+            if c == usize::MAX {
+                xi
+            } else {
+                xi + scale * s[c]
+            }
+        })
         .collect()
 }
 
@@ -260,22 +288,7 @@ pub(crate) fn sqp_step(
     let dim = mesh.dim;
     let delta = inner.margin_rel * eps + inner.margin_abs;
     let eps_qp = eps + delta;
-    let mut out = SqpStep {
-        accepted: None,
-        stationary: false,
-        step_length: 0.0,
-        limited: false,
-        corrections: 0,
-        rejections: 0,
-        lazy_rounds: 0,
-        backend_iterations: 0,
-        qp_status: QpStatus::Solved,
-        rows: Vec::new(),
-        multipliers: Vec::new(),
-        t_pairs_s: 0.0,
-        t_assembly_s: 0.0,
-        t_solve_s: 0.0,
-    };
+    let mut out = SqpStep::empty();
     let tp = Instant::now();
     let search = AnyMotionSearch::new(mesh, x);
     let mut rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
@@ -285,7 +298,17 @@ pub(crate) fn sqp_step(
     let mut carried: HashSet<ContactPair> = rows.iter().map(|r| r.pair).collect();
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
-    let (base, g) = build_qp(mesh, ctx.energy, ctx.dofs, &[], x, eps_qp, None, inner, shift)?;
+    let (base, g) = build_qp(
+        mesh,
+        ctx.energy,
+        ctx.dofs,
+        &[],
+        x,
+        eps_qp,
+        None,
+        inner,
+        shift,
+    )?;
     out.t_assembly_s += ta.elapsed().as_secs_f64();
     // The QP over the carried rows; solved again with the rows its solution violates.
     let mut warm_y: Option<Vec<f64>> = inner.warm_start.then(|| {
@@ -432,8 +455,8 @@ pub(crate) fn sqp_step(
         let tp = Instant::now();
         let md = min_distance(mesh, &z, 2.0 * eps, true);
         let admissible = md.distance >= eps - ctx.roundoff;
-        let tunnels =
-            admissible && first_contact(mesh, &search, x, &z, eta.min(eps - ctx.roundoff)).is_some();
+        let tunnels = admissible
+            && first_contact(mesh, &search, x, &z, eta.min(eps - ctx.roundoff)).is_some();
         out.t_pairs_s += tp.elapsed().as_secs_f64();
         if !admissible || tunnels {
             out.rejections += 1;
@@ -447,4 +470,127 @@ pub(crate) fn sqp_step(
     }
     out.rows = rows;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::min_distance_brute_force;
+    use crate::scene::balloons::{build, BalloonsParams};
+    use crate::solve::outer::{keep_sqp_step, run, IterationRecord, OuterSettings, RunStatus};
+    use contactlab_solvers::{backend_from_name, default_settings};
+
+    #[test]
+    fn names_round_trip() {
+        for m in OuterMethod::ALL {
+            assert_eq!(OuterMethod::from_name(m.as_str()), Some(m));
+        }
+        assert_eq!(OuterMethod::from_name("newton"), None);
+        assert_eq!(OuterMethod::names(), "pantz, sqp");
+        assert_eq!(OuterMethod::default(), OuterMethod::Pantz);
+    }
+
+    /// Asymmetric balloons n = 8 (a sliding contact) with the SQP method and `sqp`: every
+    /// iterate checked by the all-pairs distance, J non-increasing; the records and iterates.
+    fn sqp_run(sqp: SqpSettings) -> (Vec<IterationRecord>, RunStatus, f64) {
+        let scene = build(&BalloonsParams {
+            n: 8,
+            heights: [0.9, 0.2, 0.9, 0.2],
+            ..Default::default()
+        })
+        .unwrap();
+        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+        let settings = OuterSettings {
+            method: OuterMethod::Sqp,
+            sqp,
+            max_outer: 200,
+            ..Default::default()
+        };
+        let mut records: Vec<IterationRecord> = Vec::new();
+        let eps = scene.eps;
+        let mesh = &scene.mesh;
+        let res = run(
+            mesh,
+            &scene.energy,
+            eps,
+            &scene.x0,
+            b.as_mut(),
+            &settings,
+            &mut |r, x| {
+                let d = min_distance_brute_force(mesh, x).distance;
+                assert!(
+                    d >= eps * (1.0 - 1e-12),
+                    "iterate {} ({}) at distance {d:e} < eps {eps:e}",
+                    r.iteration,
+                    r.step
+                );
+                records.push(r.clone());
+            },
+        )
+        .unwrap();
+        for w in records.windows(2) {
+            assert!(
+                w[1].energy <= w[0].energy,
+                "J rose from {} to {} at {} ({})",
+                w[0].energy,
+                w[1].energy,
+                w[1].iteration,
+                w[1].step
+            );
+        }
+        assert_eq!(res.sqp_steps + res.fallback_steps, res.outer_iterations);
+        (records, res.status, res.certificate.kappa)
+    }
+
+    #[test]
+    fn sqp_steps_are_admissible_and_lower_j() {
+        let (records, status, kappa) = sqp_run(SqpSettings::default());
+        assert_eq!(records[0].step, "none");
+        let sqp = records.iter().filter(|r| r.step == "sqp").count();
+        assert!(sqp >= 1, "no SQP step taken: {records:?}");
+        for r in records.iter().filter(|r| r.step == "sqp") {
+            assert!((0.0..=1.0).contains(&r.step_length));
+            assert!(r.admissible);
+        }
+        // the status follows the certificate
+        match status {
+            RunStatus::Converged => assert!(kappa <= 1e-5, "kappa {kappa:e}"),
+            RunStatus::FixedPoint => assert!(kappa > 1e-5, "kappa {kappa:e}"),
+            s => panic!("status {s:?}"),
+        }
+    }
+
+    #[test]
+    fn collapsed_steps_fall_back_to_pantz_and_stay_admissible() {
+        // One trial per step (no halving, no correction): a step whose full length fails
+        // the decrease or a check collapses and the loop takes Pantz's step.
+        let (records, _, _) = sqp_run(SqpSettings {
+            max_halvings: 0,
+            corrections: 0,
+            ..Default::default()
+        });
+        let fallbacks: Vec<&IterationRecord> =
+            records.iter().filter(|r| r.step == "fallback").collect();
+        assert!(!fallbacks.is_empty(), "no fallback: {records:?}");
+        for r in fallbacks {
+            assert!(r.admissible);
+            assert!(r.step_length.is_nan());
+            // the collapsed attempt's QP is charged to the step
+            assert!(r.inner_iterations >= 2, "{r:?}");
+        }
+    }
+
+    #[test]
+    fn a_cut_step_with_no_decrease_is_not_kept() {
+        let mut s = SqpStep::empty();
+        // accepted, uncut: kept whatever its decrease
+        assert!(keep_sqp_step(&s, 0.0, 1e-9));
+        // cut by a safeguard: kept only with a decrease above the tolerance
+        s.limited = true;
+        assert!(!keep_sqp_step(&s, 1e-10, 1e-9));
+        assert!(keep_sqp_step(&s, 1e-8, 1e-9));
+        // stationary: kept (the stopping rule then decides)
+        s.stationary = true;
+        assert!(keep_sqp_step(&s, 0.0, 1e-9));
+    }
 }
