@@ -631,7 +631,7 @@ mod tests {
         );
         let line = String::from_utf8(csv_line(&row).unwrap()).unwrap();
         assert!(
-            line.starts_with("\"a|b,c\",,20,,,,,,,0.1,,,1e-10,,error,"),
+            line.starts_with("\"a|b,c\",,20,,,,,,,,0.1,,,1e-10,,error,"),
             "{line}"
         );
         assert!(

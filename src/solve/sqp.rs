@@ -62,7 +62,8 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OuterMethod {
-    /// Pantz's map ψ ↦ argmin { J(φ) : φ ∈ T(ψ) } (§3, §4.1): the paper's method.
+    /// Pantz's map ψ ↦ argmin { J(φ) : φ ∈ T(ψ) } (§3, §4.1): the paper's method, and the
+    /// default (docs/method.md, "The SQP outer method", says why).
     #[default]
     Pantz,
     /// Steps of a sequential quadratic program on (3) with the true distances linearized at
