@@ -73,9 +73,9 @@ fn sqp_on_asymmetric_balloons_stays_admissible_and_ends_below_pantz() {
         RunStatus::FixedPoint => assert!(kappa > tol_kappa, "fixed_point with κ = {kappa:e}"),
         s => panic!("status {s:?} (κ = {kappa:e})"),
     }
-    // Measured (clarabel, default preset): 152 SQP steps, no fallback, κ = 2.6e-5, J =
-    // 26.28419; Pantz from the same start stops at a fixed point after 69 steps, κ = 5.5e-3,
-    // J = 26.30181 (experiments/sliding.toml).
+    // Measured (clarabel, default preset): 82 SQP steps, no fallback, κ = 3.5e-5, J =
+    // 26.284195; Pantz from the same start stops at a fixed point after 69 steps, κ = 5.5e-3,
+    // J = 26.30181 (results/sliding.csv).
     assert!(kappa < 1e-3, "κ = {kappa:e}");
     let (pantz, _) = checked_run(40, OuterMethod::Pantz);
     assert!(
