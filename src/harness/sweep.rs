@@ -1092,6 +1092,24 @@ mod tests {
         assert!(m.contains("time_limit_s = 0 must be > 0"), "{m}");
         let m = err("[[scene]]\nname = \"drop\"\ndynamic = true\ntime_limit_s = 5");
         assert!(m.contains("static runs only"), "{m}");
+        // outer_method: pantz (the default) leaves the key as it was, sqp is named in it, a
+        // block overrides the defaults, an unknown name is an error naming the choices
+        assert!(runs[0].settings.outer_method == OuterMethod::Pantz);
+        let runs = parse(
+            "[defaults]\nouter_method = \"sqp\"\n[[scene]]\nname = \"ring\"\nn = [20]\n\
+             [[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"pantz\"",
+        )
+        .unwrap();
+        assert_eq!(runs[0].settings.outer_method, OuterMethod::Sqp);
+        assert!(runs[0].key.ends_with("|method=sqp"), "{}", runs[0].key);
+        assert_eq!(runs[0].case_columns().outer_method, "sqp");
+        assert_eq!(runs[1].settings.outer_method, OuterMethod::Pantz);
+        assert!(!runs[1].key.contains("method="), "{}", runs[1].key);
+        let m = err("[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"newton\"");
+        assert!(
+            m.contains("outer_method \"newton\"") && m.contains("pantz, sqp"),
+            "{m}"
+        );
     }
 
     #[test]
