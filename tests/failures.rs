@@ -153,8 +153,10 @@ fn time_limit_ends_the_run_with_its_last_admissible_iterate() {
         o.seen
     );
     assert_last_admissible(&scene, &o);
-    // J went down from the start, and the run stopped well before its end.
-    assert!(o.energy < o.seen[0]);
+    // J did not go up from the start. (Not `<`: on a loaded machine the set-up before the
+    // first solve can use most of the 0.05 s, and the limit then stops the run before its
+    // first step is accepted; measured once while two test suites shared the two cores.)
+    assert!(o.energy <= o.seen[0]);
 
     // A limit that has passed before the first step: the initial state, status time_limit.
     let mut b = Scripted::new(usize::MAX, QpStatus::Solved, Duration::ZERO);

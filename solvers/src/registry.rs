@@ -12,13 +12,16 @@
 //! `1e-8` (at `1e-9` its accelerated dual ascent hit 10⁵ steps near the fixed point at n = 8,
 //! with violation 6e-9); OSQP (ADMM, with solution polishing) at `1e-6` (at `1e-9` it needed
 //! 10⁴–10⁵ iterations per QP and hit its iteration limit near the fixed point, while at `1e-6`
-//! polishing recovers the active-set solution). The `low` and `high` presets keep OSQP three
+//! polishing recovers the active-set solution); `ip` (interior point on the condensed system,
+//! [`crate::ipm`]) at 1e-10 (at 1e-9 `ring` ended at a fixed point with κ 1.06e-5, above
+//! `tol_κ = 1e-5`; at 1e-10 it is certified, κ 2.7e-6). The `low` and `high` presets keep OSQP three
 //! orders looser than Clarabel.
 //!
 //! | backend          | low  | default | high  |
 //! |------------------|------|---------|-------|
 //! | `clarabel`       | 1e-6 | 1e-9    | 1e-11 |
 //! | `clarabel-reuse` | 1e-6 | 1e-9    | 1e-11 |
+//! | `ip`             | 1e-6 | 1e-10   | 1e-11 |
 //! | `osqp`           | 1e-4 | 1e-6    | 1e-8  |
 //! | `uzawa`          | 1e-6 | 1e-8    | 1e-10 |
 //!
@@ -69,7 +72,7 @@ pub struct Backend {
 }
 
 /// Every backend, in the order of help texts and sweeps.
-pub const BACKENDS: [Backend; 4] = [
+pub const BACKENDS: [Backend; 5] = [
     Backend {
         name: "clarabel",
         about: "",
@@ -89,6 +92,16 @@ pub const BACKENDS: [Backend; 4] = [
             high: 1e-11,
         },
         build: |s| Box::new(crate::clarabel_backend::ClarabelBackend::with_reuse(s)),
+    },
+    Backend {
+        name: "ip",
+        about: "interior point on the condensed system, faer sparse LDLT",
+        tol: PresetTolerances {
+            low: 1e-6,
+            default: 1e-10,
+            high: 1e-11,
+        },
+        build: |s| Box::new(crate::ipm::IpBackend::new(s)),
     },
     Backend {
         name: "osqp",
@@ -195,7 +208,7 @@ mod tests {
             .expect("gurobi is not registered");
         assert_eq!(
             e.to_string(),
-            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, osqp, uzawa)"
+            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, ip, osqp, uzawa)"
         );
         for name in BACKEND_NAMES {
             assert!(e.to_string().contains(name), "{name}");
@@ -203,7 +216,8 @@ mod tests {
         assert_eq!(
             backend_list_help(),
             "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \
-             structure), osqp or uzawa"
+             structure), ip (interior point on the condensed system, faer sparse LDLT), osqp \
+             or uzawa"
         );
     }
 }

@@ -1,4 +1,4 @@
-//! The three backends agree on seeded random feasible QPs, report infeasibility as a status,
+//! Every registered backend agrees on seeded random feasible QPs, report infeasibility as a status,
 //! reject bad input with a named error, and solve a degenerate contact-like QP.
 
 use contactlab_solvers::{

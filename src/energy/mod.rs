@@ -12,8 +12,12 @@
 //!
 //! * [`membrane::TensionString`]`<D>`: tension-only strings and membranes of P1 edges
 //!   ([`MembraneEnergy`] in 2D, [`String3dEnergy`] in 3D);
-//! * [`NeoHookean`]`<D, N>`: compressible neo-Hookean P1 simplices ([`NeoHookean2d`]
-//!   triangles, [`NeoHookean3d`] tetrahedra);
+//! * [`P1Solid`]`<D, N, L>`: P1 simplices (triangles, tetrahedra) with a stored energy law
+//!   `L` ([`Law`]): the compressible neo-Hookean [`NeoHookean`]`<D, N>` ([`NeoHookean2d`] in
+//!   plane strain, [`NeoHookeanPlaneStress2d`], [`NeoHookean3d`]) and the small-strain
+//!   [`LinearElastic2d`] (plane strain or stress) and [`LinearElastic3d`]; [`Elasticity`] and
+//!   [`Plane`] (in `material`) convert E, ν and give the plane-stress constants;
+//! * [`DeadLoad`]: point forces, tractions and pressures on solids' boundaries (dead loads);
 //! * [`Gas`]`<R>`: the enclosed gas `−C ln V` over a [`gas::Region`] ([`GasEnergy`] over a
 //!   closed polygon's area, [`Gas3dEnergy`] over a closed surface's volume);
 //! * [`Gravity`]`<D>`: gravity on lumped vertex masses;
@@ -66,19 +70,30 @@
 pub(crate) mod fd_test;
 pub mod gas;
 pub mod gravity;
+pub mod linear_elastic;
+pub mod load;
 pub mod mass;
+pub mod material;
 pub mod membrane;
 pub mod membrane3d;
 pub mod neo_hookean;
 pub mod pressure;
+pub mod solid;
 pub mod string3d;
 
 pub use gas::{Gas, Gas3dEnergy, GasEnergy, OpenSurface};
 pub use gravity::Gravity;
+pub use linear_elastic::{LinearElastic2d, LinearElastic3d, LinearLaw};
+pub use load::DeadLoad;
+pub use material::{Elasticity, MaterialError, Plane};
 pub use membrane::MembraneEnergy;
 pub use membrane3d::Membrane3dEnergy;
-pub use neo_hookean::{DegenerateTet, NeoHookean, NeoHookean2d, NeoHookean3d};
+pub use neo_hookean::{
+    NeoHookean, NeoHookean2d, NeoHookean3d, NeoHookeanLaw, NeoHookeanPlaneStress,
+    NeoHookeanPlaneStress2d,
+};
 pub use pressure::PressureEnergy;
+pub use solid::{DegenerateTet, Law, P1Solid};
 pub use string3d::String3dEnergy;
 
 use nalgebra::allocator::Allocator;
@@ -294,6 +309,21 @@ pub trait Energy: Send + Sync {
     fn exact_in_model(&self) -> bool {
         false
     }
+    /// The Cauchy stress of each element at `x`, for the terms of solids (the cell data of the
+    /// VTK frames); `None` (the default) for the other terms.
+    fn element_stress(&self, _x: &[f64]) -> Option<ElementStress> {
+        None
+    }
+}
+
+/// Per-element Cauchy stress of a solid term ([`Energy::element_stress`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementStress {
+    /// Each element's vertices (a triangle's fourth entry is `usize::MAX`).
+    pub elements: Vec<[usize; 4]>,
+    /// Its Cauchy stress, a 3×3 tensor (2D: with the out-of-plane `σ_zz` of plane strain or
+    /// stress); NaN where the element is inverted.
+    pub sigma: Vec<nalgebra::Matrix3<f64>>,
 }
 
 /// Which Hessian the inner steps' quadratic model uses.

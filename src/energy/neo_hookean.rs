@@ -1,80 +1,59 @@
-//! Compressible neo-Hookean energy of P1 simplices in `D` dimensions: triangles in 2D (plane
-//! strain) and tetrahedra in 3D, the hyperelastic solid model used for the solid bodies (see
-//! Pantz 2008, §7, and e.g. Bonet & Wood, *Nonlinear Continuum Mechanics for FEA*, §6.4.3).
+//! The compressible neo-Hookean solid: P1 triangles in 2D (plane strain, or plane stress by
+//! condensation of the out-of-plane stretch) and tetrahedra in 3D (see Pantz 2008, §7, and e.g.
+//! Bonet & Wood, *Nonlinear Continuum Mechanics for FEA*, §6.4.3). The element engine is
+//! [`P1Solid`](super::solid::P1Solid); this module gives the laws. docs/materials.md has the
+//! formulas and the E/ν conversion.
 //!
-//! An element has `N = D + 1` vertices. With `F = Ds Dm⁻¹` (`Ds = [x1 − x0, …, x_D − x0]`,
-//! `Dm` the same in the reference configuration) and `J = det F`:
-//!
-//! ```text
-//! W(F) = μ/2 (|F|² − D) − μ ln J + λ/2 (ln J)²,        J(x) = Σ_T |T_ref| W(F_T),
-//! ```
-//!
-//! (`|T_ref|` the reference area in 2D, volume in 3D) and `J(x) = +∞` as soon as one element
-//! has `det F ≤ 0`. The first Piola–Kirchhoff stress and its derivative are
+//! **Plane strain and 3D** ([`NeoHookeanLaw`]). With `J = det F` (`D` = 2 or 3):
 //!
 //! ```text
+//! W(F) = μ/2 (|F|² − D) − μ ln J + λ/2 (ln J)²,    W = +∞ when J ≤ 0,
 //! P = μ (F − F⁻ᵀ) + λ ln J F⁻ᵀ,
-//! ∂P_ij/∂F_kl = μ δ_ik δ_jl + (μ − λ ln J) F⁻ᵀ_il F⁻ᵀ_kj + λ F⁻ᵀ_ij F⁻ᵀ_kl.
+//! ∂P_ij/∂F_kl = μ δ_ik δ_jl + (μ − λ ln J) F⁻ᵀ_il F⁻ᵀ_kj + λ F⁻ᵀ_ij F⁻ᵀ_kl,
+//! σ = P Fᵀ / J   (2D plane strain: σ_zz = λ ln J / J).
 //! ```
 //!
-//! Writing `F_kl = Σ_a x_{a,k} G_{a,l}` with `G = [−(B_0 + … + B_{D−1}); B_0; …; B_{D−1}]`
-//! (`B = Dm⁻¹`, rows `B_m`), the element gradient is `∂/∂x_{a,c} = |T| Σ_l P_cl G_al` and the
-//! `D(D+1) × D(D+1)` element Hessian (6×6 in 2D, 12×12 in 3D) is
-//! `|T| Σ_{l,n} ∂P_cl/∂F_dn G_al G_bn` at dofs `(D·a + c, D·b + d)`. With `projected = true`
-//! each element Hessian's negative eigenvalues are clamped to zero (symmetric
-//! eigendecomposition, `energy::project_psd`); an element Hessian that is already positive
-//! semi-definite is kept as is.
+//! In 2D this is the 3D law with `F_zz = 1` (plane strain).
 //!
-//! Everything per element (`F`, `W`, `P`, `∂P/∂F`, `G`, the projection) is one code for both
-//! dimensions. The one per-dimension difference is the order of the sums of the Hessian
-//! contraction (2D: one running sum over `(l, n)`; 3D: `Σ_n ∂P/∂F G_bn` first, then `Σ_l`),
-//! kept from the former separate 2D and 3D types so that the results stay bit for bit the same.
+//! **Plane stress** ([`NeoHookeanPlaneStress`], 2D only). The out-of-plane stretch `s = F_zz`
+//! is the one that makes `σ_zz = 0`: `W_ps(F) = min_{s>0} W₃(F ⊕ s)`, with
+//! `W₃(F ⊕ s) = μ/2 (|F|² + s² − 3) − μ ln(J s) + λ/2 (ln(J s))²` (`J = det F`, 2×2). The
+//! minimum is the root of `μ (s² − 1) + λ ln(J s) = 0` (increasing in `s`: one root, found by
+//! Newton's method in `t = ln s` from the side where the function is positive, monotone since it
+//! is convex in `t`). By the envelope theorem `P = μ (F − F⁻ᵀ) + λ ln(J s) F⁻ᵀ`, and with
+//! `∂²W₃/∂s² = 2μ + λ/s²` at the root,
 //!
-//! **Reference orientation.** In 2D ([`NeoHookean2d::new`]) a triangle listed clockwise in the
-//! reference is kept as listed (its `Dm` then has a negative determinant, and `F` is still the
-//! identity at the reference); degenerate triangles must not be passed. In 3D
-//! ([`NeoHookean3d::new`]) every tetrahedron is stored positively oriented (`det Dm > 0`): one
-//! listed with negative reference volume has its vertices 1 and 2 swapped (the element, its
-//! energy and its reference volume are unchanged; only the stored vertex order differs). A
-//! degenerate one (`|det Dm| ≤ 10⁻¹²·ℓ³`, `ℓ` its longest reference edge, or a non-finite
-//! `det Dm`) cannot be oriented and is rejected with a [`DegenerateTet`] error naming it.
+//! ```text
+//! ∂P/∂F = [μ δ_ik δ_jl + (μ − λ ln(Js)) F⁻ᵀ_il F⁻ᵀ_kj + λ F⁻ᵀ_ij F⁻ᵀ_kl] − λ² F⁻ᵀ_ij F⁻ᵀ_kl / (2μ s² + λ),
+//! σ = P Fᵀ / (J s),  σ_zz = 0.
+//! ```
+//!
+//! At small strain its in-plane Lamé constant is `λ − λ²/(2μ + λ) = 2μλ/(λ + 2μ)`, the
+//! plane-stress `λ*` of linear elasticity (tested).
+//!
+//! Each law is a [`Law`]; an inverted element has `W = +∞` and contributes nothing to the
+//! gradient or Hessian.
 
-use super::{
-    chunked_sum, chunked_triplets, par_scatter, project_psd, push_block, Energy, Hessian, TermKind,
-};
-use nalgebra::allocator::Allocator;
-use nalgebra::{Const, DefaultAllocator, DimDiff, DimMin, DimSub, SMatrix, U1};
-use thiserror::Error;
+#[cfg(test)]
+use super::solid::ds;
+pub use super::solid::DegenerateTet;
+use super::solid::{embed3, Law, P1Solid, PiolaDerivative};
+#[cfg(test)]
+use super::{Energy, Hessian};
+use nalgebra::{Const, DimMin, Matrix2, Matrix3, SMatrix};
 
-/// A reference tetrahedron of (numerically) zero volume: it has no orientation and no `Dm⁻¹`.
-#[derive(Debug, Error, Clone, PartialEq)]
-#[error("tetrahedron {index} {tet:?} is degenerate (reference volume = {volume:e})")]
-pub struct DegenerateTet {
-    /// Index of the tetrahedron in the list passed to [`NeoHookean3d::new`].
-    pub index: usize,
-    /// Its vertices.
-    pub tet: [usize; 4],
-    /// Its signed reference volume `det Dm / 6`.
-    pub volume: f64,
-}
-
-/// Compressible neo-Hookean energy of a set of P1 simplices of `N = D + 1` vertices in `D`
-/// dimensions: [`NeoHookean2d`] (triangles, plane strain) and [`NeoHookean3d`] (tetrahedra)
-/// are this type. (`N` is a parameter of its own because a const generic cannot be written
-/// `D + 1`; the constructors only exist for `(2, 3)` and `(3, 4)`.)
-#[derive(Clone, Debug)]
-pub struct NeoHookean<const D: usize, const N: usize> {
-    /// Elements (`N` vertices each); in 3D positively oriented in the reference configuration.
-    pub elements: Vec<[usize; N]>,
-    /// `Dm⁻¹` per element.
-    pub dm_inv: Vec<SMatrix<f64, D, D>>,
-    /// Reference measure per element (area in 2D, volume in 3D; positive).
-    pub measure: Vec<f64>,
+/// The compressible neo-Hookean law in `D` dimensions (2D: plane strain).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeoHookeanLaw {
     /// Shear modulus `μ`.
     pub mu: f64,
     /// Lamé's first parameter `λ`.
     pub lambda: f64,
 }
+
+/// Compressible neo-Hookean energy of P1 simplices in `D` dimensions: [`NeoHookean2d`]
+/// (triangles, plane strain) and [`NeoHookean3d`] (tetrahedra).
+pub type NeoHookean<const D: usize, const N: usize> = P1Solid<D, N, NeoHookeanLaw>;
 
 /// Compressible neo-Hookean energy of a set of triangles (2D, plane strain).
 pub type NeoHookean2d = NeoHookean<2, 3>;
@@ -82,59 +61,44 @@ pub type NeoHookean2d = NeoHookean<2, 3>;
 /// Compressible neo-Hookean energy of a set of tetrahedra (3D).
 pub type NeoHookean3d = NeoHookean<3, 4>;
 
-/// `∂P_cl/∂F_dn` at `[c][l][d][n]`.
-type PiolaDerivative<const D: usize> = [[[[f64; D]; D]; D]; D];
+/// Compressible neo-Hookean energy of a set of triangles in plane stress.
+pub type NeoHookeanPlaneStress2d = P1Solid<2, 3, NeoHookeanPlaneStress>;
 
-/// `Ds = [x1 − x0, …, x_D − x0]` of the element with vertices `t` (`D` columns).
-fn ds<const D: usize, const N: usize>(x: &[f64], t: &[usize; N]) -> SMatrix<f64, D, D> {
-    SMatrix::from_fn(|k, m| x[D * t[m + 1] + k] - x[D * t[0] + k])
-}
-
-/// `W(F)`; `+∞` when `det F ≤ 0`.
-fn energy_density<const D: usize>(f: &SMatrix<f64, D, D>, mu: f64, lambda: f64) -> f64
-where
-    Const<D>: DimMin<Const<D>, Output = Const<D>>,
-{
-    let j = f.determinant();
-    if j <= 0.0 {
-        return f64::INFINITY;
+impl NeoHookean2d {
+    /// Builds the energy from reference positions `x_ref` (flat, 2D); see
+    /// [`P1Solid::triangles`].
+    pub fn new(triangles: Vec<[usize; 3]>, x_ref: &[f64], mu: f64, lambda: f64) -> Self {
+        Self::triangles(triangles, x_ref, NeoHookeanLaw { mu, lambda })
     }
-    let lj = j.ln();
-    0.5 * mu * (f.norm_squared() - D as f64) - mu * lj + 0.5 * lambda * lj * lj
 }
 
-/// The first Piola–Kirchhoff stress `P(F)`; `None` when `det F ≤ 0`.
-fn first_piola<const D: usize>(
-    f: &SMatrix<f64, D, D>,
+impl NeoHookean3d {
+    /// Builds the energy from reference positions `x_ref` (flat, 3D); see [`P1Solid::tets`].
+    pub fn new(
+        tets: Vec<[usize; 4]>,
+        x_ref: &[f64],
+        mu: f64,
+        lambda: f64,
+    ) -> Result<Self, DegenerateTet> {
+        Self::tets(tets, x_ref, NeoHookeanLaw { mu, lambda })
+    }
+}
+
+impl NeoHookeanPlaneStress2d {
+    /// Builds the plane-stress energy from reference positions `x_ref` (flat, 2D).
+    pub fn new(triangles: Vec<[usize; 3]>, x_ref: &[f64], mu: f64, lambda: f64) -> Self {
+        Self::triangles(triangles, x_ref, NeoHookeanPlaneStress { mu, lambda })
+    }
+}
+
+/// `∂P/∂F` of the neo-Hookean form with `ln J` replaced by `lj` (plane strain and 3D:
+/// `lj = ln det F`; plane stress: `ln(det F · s)`).
+fn nh_tangent<const D: usize>(
+    fit: &SMatrix<f64, D, D>,
     mu: f64,
     lambda: f64,
-) -> Option<SMatrix<f64, D, D>>
-where
-    Const<D>: DimMin<Const<D>, Output = Const<D>>,
-{
-    let j = f.determinant();
-    if j <= 0.0 {
-        return None;
-    }
-    let fit = f.try_inverse()?.transpose();
-    Some((f - fit) * mu + fit * (lambda * j.ln()))
-}
-
-/// `∂P/∂F` at `F`; `None` when `det F ≤ 0`.
-fn piola_derivative<const D: usize>(
-    f: &SMatrix<f64, D, D>,
-    mu: f64,
-    lambda: f64,
-) -> Option<PiolaDerivative<D>>
-where
-    Const<D>: DimMin<Const<D>, Output = Const<D>>,
-{
-    let j = f.determinant();
-    if j <= 0.0 {
-        return None;
-    }
-    let lj = j.ln();
-    let fit = f.try_inverse()?.transpose();
+    lj: f64,
+) -> PiolaDerivative<D> {
     let mut dp = [[[[0.0; D]; D]; D]; D];
     for (c, dpc) in dp.iter_mut().enumerate() {
         for (l, dpcl) in dpc.iter_mut().enumerate() {
@@ -148,183 +112,14 @@ where
             }
         }
     }
-    Some(dp)
+    dp
 }
 
-impl NeoHookean2d {
-    /// Builds the energy from reference positions `x_ref` (flat, 2D). A triangle listed
-    /// clockwise in the reference is handled (its `Dm` then has negative determinant, and
-    /// `F` is still the identity at the reference); degenerate triangles must not be passed.
-    pub fn new(triangles: Vec<[usize; 3]>, x_ref: &[f64], mu: f64, lambda: f64) -> Self {
-        let mut dm_inv = Vec::with_capacity(triangles.len());
-        let mut measure = Vec::with_capacity(triangles.len());
-        for t in &triangles {
-            let dm = ds::<2, 3>(x_ref, t);
-            measure.push(0.5 * dm.determinant().abs());
-            dm_inv.push(dm.try_inverse().unwrap_or_else(SMatrix::zeros));
-        }
-        Self {
-            elements: triangles,
-            dm_inv,
-            measure,
-            mu,
-            lambda,
-        }
-    }
-}
-
-impl NeoHookean3d {
-    /// Builds the energy from reference positions `x_ref` (flat, 3D). Negatively oriented
-    /// tetrahedra are reordered (vertices 1 and 2 swapped); a degenerate one is an error.
-    pub fn new(
-        mut tets: Vec<[usize; 4]>,
-        x_ref: &[f64],
-        mu: f64,
-        lambda: f64,
-    ) -> Result<Self, DegenerateTet> {
-        const DIM: usize = 3;
-        let mut dm_inv = Vec::with_capacity(tets.len());
-        let mut measure = Vec::with_capacity(tets.len());
-        for (index, t) in tets.iter_mut().enumerate() {
-            let mut dm = ds::<3, 4>(x_ref, t);
-            let det = dm.determinant();
-            let l = (0..4)
-                .flat_map(|a| (a + 1..4).map(move |b| (a, b)))
-                .map(|(a, b)| {
-                    (0..DIM)
-                        .map(|k| (x_ref[DIM * t[b] + k] - x_ref[DIM * t[a] + k]).powi(2))
-                        .sum::<f64>()
-                        .sqrt()
-                })
-                .fold(0.0, f64::max);
-            if !det.is_finite() || det.abs() <= 1e-12 * l * l * l {
-                return Err(DegenerateTet {
-                    index,
-                    tet: *t,
-                    volume: det / 6.0,
-                });
-            }
-            if det < 0.0 {
-                t.swap(1, 2);
-                dm.swap_columns(0, 1);
-            }
-            measure.push(det.abs() / 6.0);
-            dm_inv.push(dm.try_inverse().ok_or(DegenerateTet {
-                index,
-                tet: *t,
-                volume: det / 6.0,
-            })?);
-        }
-        Ok(Self {
-            elements: tets,
-            dm_inv,
-            measure,
-            mu,
-            lambda,
-        })
-    }
-}
-
-impl<const D: usize, const N: usize> NeoHookean<D, N>
+impl<const D: usize> Law<D> for NeoHookeanLaw
 where
     Const<D>: DimMin<Const<D>, Output = Const<D>>,
 {
-    /// `G` of element `e` (rows `G_a`, `a = 0..N`).
-    fn grad_op(&self, e: usize) -> [[f64; D]; N] {
-        let b = &self.dm_inv[e];
-        let mut g = [[0.0; D]; N];
-        for l in 0..D {
-            for m in 0..D {
-                g[m + 1][l] = b[(m, l)];
-            }
-            let mut s = b[(0, l)];
-            for m in 1..D {
-                s += b[(m, l)];
-            }
-            g[0][l] = -s;
-        }
-        g
-    }
-
-    /// Deformation gradient of element `e`.
-    pub fn deformation_gradient(&self, x: &[f64], e: usize) -> SMatrix<f64, D, D> {
-        ds(x, &self.elements[e]) * self.dm_inv[e]
-    }
-
-    /// Exact element Hessian (`K = D·N`: 6 in 2D, 12 in 3D), or `None` if inverted.
-    fn element_hessian<const K: usize>(&self, x: &[f64], e: usize) -> Option<SMatrix<f64, K, K>> {
-        assert_eq!(K, D * N, "element Hessian size");
-        let dp = piola_derivative(&self.deformation_gradient(x, e), self.mu, self.lambda)?;
-        let g = self.grad_op(e);
-        let mut h = SMatrix::<f64, K, K>::zeros();
-        if D == 2 {
-            // one running sum over (l, n) per entry (the order of the former 2D type)
-            for a in 0..N {
-                for c in 0..D {
-                    for b in 0..N {
-                        for d in 0..D {
-                            let mut s = 0.0;
-                            for l in 0..D {
-                                for n in 0..D {
-                                    s += dp[c][l][d][n] * g[a][l] * g[b][n];
-                                }
-                            }
-                            h[(D * a + c, D * b + d)] = self.measure[e] * s;
-                        }
-                    }
-                }
-            }
-        } else {
-            // t[c][l][b][d] = Σ_n ∂P_cl/∂F_dn G_bn, then Σ_l G_al t[c][l][b][d] (the order of
-            // the former 3D type)
-            let mut t = [[[[0.0; D]; N]; D]; D];
-            for (c, tc) in t.iter_mut().enumerate() {
-                for (l, tcl) in tc.iter_mut().enumerate() {
-                    for (b, tclb) in tcl.iter_mut().enumerate() {
-                        for (d, v) in tclb.iter_mut().enumerate() {
-                            *v = (0..D).map(|n| dp[c][l][d][n] * g[b][n]).sum();
-                        }
-                    }
-                }
-            }
-            for a in 0..N {
-                for c in 0..D {
-                    for b in 0..N {
-                        for d in 0..D {
-                            let s: f64 = (0..D).map(|l| g[a][l] * t[c][l][b][d]).sum();
-                            h[(D * a + c, D * b + d)] = self.measure[e] * s;
-                        }
-                    }
-                }
-            }
-        }
-        Some((h + h.transpose()) * 0.5)
-    }
-
-    /// Pushes the triplets of the element Hessians (`K = D·N`), each projected if asked.
-    fn push_hessians<const K: usize>(&self, x: &[f64], projected: bool, h: &mut Hessian)
-    where
-        Const<K>: DimSub<U1>,
-        DefaultAllocator:
-            Allocator<Const<K>, DimDiff<Const<K>, U1>> + Allocator<DimDiff<Const<K>, U1>>,
-    {
-        chunked_triplets(self.elements.len(), &mut h.triplets, |e, out| {
-            let Some(mut he) = self.element_hessian::<K>(x, e) else {
-                return;
-            };
-            if projected {
-                project_psd(&mut he);
-            }
-            push_block(out, D, &self.elements[e], |r, c| he[(r, c)]);
-        });
-    }
-}
-
-impl<const D: usize, const N: usize> Energy for NeoHookean<D, N>
-where
-    Const<D>: DimMin<Const<D>, Output = Const<D>>,
-{
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         if D == 2 {
             "neo_hookean"
         } else {
@@ -332,60 +127,138 @@ where
         }
     }
 
-    fn kind(&self) -> TermKind {
-        TermKind::Elastic
-    }
-
-    fn value(&self, x: &[f64]) -> f64 {
-        chunked_sum(self.elements.len(), |r| {
-            let mut s = 0.0;
-            for e in r {
-                let w = energy_density(&self.deformation_gradient(x, e), self.mu, self.lambda);
-                if w == f64::INFINITY {
-                    return f64::INFINITY;
-                }
-                s += self.measure[e] * w;
-            }
-            s
-        })
-    }
-
-    /// Inverted elements (energy `+∞`) contribute nothing.
-    fn add_gradient(&self, x: &[f64], g: &mut [f64]) {
-        par_scatter(
-            self.elements.len(),
-            g,
-            |e| {
-                let p = first_piola(&self.deformation_gradient(x, e), self.mu, self.lambda)?;
-                let gop = self.grad_op(e);
-                let mut ge = [[0.0; D]; N];
-                for (a, gea) in ge.iter_mut().enumerate() {
-                    for (c, gac) in gea.iter_mut().enumerate() {
-                        let s: f64 = (0..D).map(|l| p[(c, l)] * gop[a][l]).sum();
-                        *gac = self.measure[e] * s;
-                    }
-                }
-                Some(ge)
-            },
-            |e, ge, g| {
-                for (a, &v) in self.elements[e].iter().enumerate() {
-                    for c in 0..D {
-                        g[D * v + c] += ge[a][c];
-                    }
-                }
-            },
-        );
-    }
-
-    /// Inverted elements contribute nothing.
-    fn add_hessian(&self, x: &[f64], projected: bool, h: &mut Hessian) {
-        // the element Hessian is a static K×K matrix, K = D·N (a const generic cannot be
-        // computed from D and N, hence the match)
-        match (D, N) {
-            (2, 3) => self.push_hessians::<6>(x, projected, h),
-            (3, 4) => self.push_hessians::<12>(x, projected, h),
-            _ => unreachable!("NeoHookean<{D}, {N}>: only (2, 3) and (3, 4) are built"),
+    fn density(&self, f: &SMatrix<f64, D, D>) -> f64 {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return f64::INFINITY;
         }
+        let lj = j.ln();
+        0.5 * self.mu * (f.norm_squared() - D as f64) - self.mu * lj + 0.5 * self.lambda * lj * lj
+    }
+
+    fn piola(&self, f: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return None;
+        }
+        let fit = f.try_inverse()?.transpose();
+        Some((f - fit) * self.mu + fit * (self.lambda * j.ln()))
+    }
+
+    fn tangent(&self, f: &SMatrix<f64, D, D>) -> Option<PiolaDerivative<D>> {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return None;
+        }
+        let fit = f.try_inverse()?.transpose();
+        Some(nh_tangent(&fit, self.mu, self.lambda, j.ln()))
+    }
+
+    fn cauchy(&self, f: &SMatrix<f64, D, D>) -> Option<Matrix3<f64>> {
+        let p = self.piola(f)?;
+        let j = f.determinant();
+        let mut s = embed3(&((p * f.transpose()) / j));
+        // plane strain: P_zz = μ (1 − 1) + λ ln J (F_zz = 1)
+        s[(2, 2)] = if D == 2 {
+            self.lambda * j.ln() / j
+        } else {
+            s[(2, 2)]
+        };
+        Some(s)
+    }
+}
+
+/// The compressible neo-Hookean law in plane stress (2D): the out-of-plane stretch
+/// minimizes the 3D energy (module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeoHookeanPlaneStress {
+    /// Shear modulus `μ`.
+    pub mu: f64,
+    /// Lamé's first parameter `λ` (of the 3D material).
+    pub lambda: f64,
+}
+
+impl NeoHookeanPlaneStress {
+    /// The out-of-plane stretch `s` of `J = det F > 0`: the root of
+    /// `μ (s² − 1) + λ ln(J s) = 0`.
+    pub fn stretch(&self, j: f64) -> f64 {
+        let (mu, la) = (self.mu, self.lambda);
+        if la == 0.0 {
+            return 1.0;
+        }
+        let lj = j.ln();
+        // g(t) = μ (e^{2t} − 1) + λ (ln J + t), increasing and convex in t = ln s
+        let g = |t: f64| mu * ((2.0 * t).exp() - 1.0) + la * (lj + t);
+        // start where g ≥ 0 (Newton then decreases monotonically to the root): t = 0 if
+        // ln J ≥ 0, else t = −ln J (g = μ(J⁻² − 1) ≥ 0 there)
+        let mut t = if lj >= 0.0 { 0.0 } else { -lj };
+        for _ in 0..100 {
+            let gt = g(t);
+            let dg = 2.0 * mu * (2.0 * t).exp() + la;
+            let step = gt / dg;
+            t -= step;
+            if step.abs() <= 1e-15 * (1.0 + t.abs()) {
+                break;
+            }
+        }
+        t.exp()
+    }
+}
+
+impl Law<2> for NeoHookeanPlaneStress {
+    fn name(&self) -> &'static str {
+        "neo_hookean_plane_stress"
+    }
+
+    fn density(&self, f: &Matrix2<f64>) -> f64 {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return f64::INFINITY;
+        }
+        let s = self.stretch(j);
+        let ljs = (j * s).ln();
+        0.5 * self.mu * (f.norm_squared() + s * s - 3.0) - self.mu * ljs
+            + 0.5 * self.lambda * ljs * ljs
+    }
+
+    fn piola(&self, f: &Matrix2<f64>) -> Option<Matrix2<f64>> {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return None;
+        }
+        let s = self.stretch(j);
+        let fit = f.try_inverse()?.transpose();
+        Some((f - fit) * self.mu + fit * (self.lambda * (j * s).ln()))
+    }
+
+    fn tangent(&self, f: &Matrix2<f64>) -> Option<PiolaDerivative<2>> {
+        let j = f.determinant();
+        if j <= 0.0 {
+            return None;
+        }
+        let s = self.stretch(j);
+        let fit = f.try_inverse()?.transpose();
+        let mut dp = nh_tangent(&fit, self.mu, self.lambda, (j * s).ln());
+        let c = self.lambda * self.lambda / (2.0 * self.mu * s * s + self.lambda);
+        for (a, dpa) in dp.iter_mut().enumerate() {
+            for (b, dpab) in dpa.iter_mut().enumerate() {
+                for (k, dpabk) in dpab.iter_mut().enumerate() {
+                    for (l, v) in dpabk.iter_mut().enumerate() {
+                        *v -= c * fit[(a, b)] * fit[(k, l)];
+                    }
+                }
+            }
+        }
+        Some(dp)
+    }
+
+    fn cauchy(&self, f: &Matrix2<f64>) -> Option<Matrix3<f64>> {
+        let p = self.piola(f)?;
+        let j = f.determinant();
+        let s = self.stretch(j);
+        let mut m = embed3(&((p * f.transpose()) / (j * s)));
+        m[(2, 2)] = 0.0;
+        Some(m)
     }
 }
 
@@ -505,8 +378,7 @@ mod tests_2d {
                     elements: vec![nh.elements[e]],
                     dm_inv: vec![nh.dm_inv[e]],
                     measure: vec![nh.measure[e]],
-                    mu: nh.mu,
-                    lambda: nh.lambda,
+                    law: nh.law,
                 };
                 one.elements[0] = [0, 1, 2];
                 let mut xe = vec![0.0; 6];
@@ -606,7 +478,7 @@ mod tests_2d {
 }
 
 #[cfg(test)]
-mod tests_3d {
+pub(crate) mod tests_3d {
     use super::*;
     use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
     use nalgebra::{DMatrix, Matrix3, Rotation3, Vector3};
@@ -616,7 +488,7 @@ mod tests_3d {
     /// The `n×n×n` grid of unit cubes of side `h`, each split into 6 tetrahedra around its
     /// diagonal (Kuhn split; half of them listed with negative orientation), vertices
     /// `v = i + (n+1) j + (n+1)² k`. Returns `(x_ref, tets)`.
-    fn cube_grid(n: usize, h: f64) -> (Vec<f64>, Vec<[usize; 4]>) {
+    pub(crate) fn cube_grid(n: usize, h: f64) -> (Vec<f64>, Vec<[usize; 4]>) {
         let m = n + 1;
         let mut x = Vec::with_capacity(3 * m * m * m);
         for k in 0..m {
@@ -704,7 +576,7 @@ mod tests_3d {
         let total: f64 = nh.measure.iter().sum();
         assert!((total - 1.0).abs() < 1e-14);
         // uniform dilation by s: J = W(sI) · 1
-        let (mu, la, s) = (nh.mu, nh.lambda, 1.3f64);
+        let (mu, la, s) = (nh.law.mu, nh.law.lambda, 1.3f64);
         let x: Vec<f64> = xr.iter().map(|v| s * v).collect();
         let w =
             0.5 * mu * (3.0 * s * s - 3.0) - 3.0 * mu * s.ln() + 0.5 * la * (3.0 * s.ln()).powi(2);
@@ -794,8 +666,7 @@ mod tests_3d {
                     elements: vec![[0, 1, 2, 3]],
                     dm_inv: vec![nh.dm_inv[e]],
                     measure: vec![nh.measure[e]],
-                    mu: nh.mu,
-                    lambda: nh.lambda,
+                    law: nh.law,
                 };
                 let mut xe = vec![0.0; 12];
                 for (a, &v) in nh.elements[e].iter().enumerate() {
@@ -868,5 +739,138 @@ mod tests_3d {
         x.swap(3 * t[1] + 2, 3 * t[2] + 2);
         let v = assert_thread_independent(|| nh.value(&x).to_bits());
         assert_eq!(f64::from_bits(v), f64::INFINITY);
+    }
+}
+
+#[cfg(test)]
+mod tests_plane_stress {
+    use super::*;
+    use crate::energy::fd_test::{fd_gradient, fd_hessian, rel};
+    use crate::energy::material::{Elasticity, Plane};
+    use crate::energy::LinearElastic2d;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A jittered 3×3-vertex grid (8 triangles) and an affine deformation of it with noise.
+    fn config(rng: &mut ChaCha8Rng, amp: f64) -> (Vec<f64>, Vec<[usize; 3]>, Vec<f64>) {
+        let mut xr = Vec::new();
+        for j in 0..3 {
+            for i in 0..3 {
+                xr.push(i as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+                xr.push(j as f64 * 0.5 + rng.gen_range(-0.05..0.05));
+            }
+        }
+        let mut tris = Vec::new();
+        for j in 0..2 {
+            for i in 0..2 {
+                let v = 3 * j + i;
+                tris.push([v, v + 1, v + 4]);
+                tris.push([v, v + 4, v + 3]);
+            }
+        }
+        let a = Matrix2::new(
+            1.0 + rng.gen_range(-amp..amp),
+            rng.gen_range(-amp..amp),
+            rng.gen_range(-amp..amp),
+            1.0 + rng.gen_range(-amp..amp),
+        );
+        let mut x = xr.clone();
+        for v in 0..9 {
+            let p = a * nalgebra::Vector2::new(xr[2 * v], xr[2 * v + 1]);
+            x[2 * v] = p.x + rng.gen_range(-0.02..0.02);
+            x[2 * v + 1] = p.y + rng.gen_range(-0.02..0.02);
+        }
+        (xr, tris, x)
+    }
+
+    #[test]
+    fn energy_neo_hookean_plane_stress_fd_and_projection() {
+        let mut rng = ChaCha8Rng::seed_from_u64(61);
+        for k in 0..16 {
+            let (xr, tris, x) = config(&mut rng, if k < 8 { 0.2 } else { 0.4 });
+            let nh = NeoHookeanPlaneStress2d::new(
+                tris,
+                &xr,
+                rng.gen_range(0.5..2.0),
+                rng.gen_range(0.0..5.0),
+            );
+            if !nh.value(&x).is_finite() {
+                continue;
+            }
+            let mut g = vec![0.0; x.len()];
+            nh.add_gradient(&x, &mut g);
+            assert!(rel(&g, &fd_gradient(&nh, &x, 1e-6)) <= 1e-6);
+            let mut h = Hessian::default();
+            nh.add_hessian(&x, false, &mut h);
+            let hd = h.to_dense(x.len());
+            let r = rel(hd.as_slice(), fd_hessian(&nh, &x, 1e-6).as_slice());
+            assert!(r <= 1e-5, "rel {r}");
+            let mut hp = Hessian::default();
+            nh.add_hessian(&x, true, &mut hp);
+            let hp = hp.to_dense(x.len());
+            assert!(hp.symmetric_eigenvalues().min() >= -1e-10 * hp.norm().max(1.0));
+        }
+    }
+
+    #[test]
+    fn energy_neo_hookean_plane_stress_zero_sigma_zz_rigid_invariant_small_strain() {
+        let law = NeoHookeanPlaneStress {
+            mu: 1.3,
+            lambda: 2.9,
+        };
+        // the stretch makes the 3D P_zz = μ (s − 1/s) + λ ln(J s)/s vanish
+        for j in [0.3, 0.9, 1.0, 1.2, 4.0] {
+            let s = law.stretch(j);
+            let pzz = law.mu * (s - 1.0 / s) + law.lambda * (j * s).ln() / s;
+            assert!(pzz.abs() <= 1e-13, "J = {j}: P_zz = {pzz}");
+        }
+        // rigid motions: zero energy and force
+        let mut rng = ChaCha8Rng::seed_from_u64(62);
+        let (xr, tris, x) = config(&mut rng, 0.2);
+        let nh = NeoHookeanPlaneStress2d::triangles(tris.clone(), &xr, law);
+        let (c, sn) = (0.8f64.cos(), 0.8f64.sin());
+        let rigid = |y: &[f64]| -> Vec<f64> {
+            y.chunks(2)
+                .flat_map(|p| [c * p[0] - sn * p[1] + 2.0, sn * p[0] + c * p[1] - 1.0])
+                .collect()
+        };
+        assert!(nh.value(&rigid(&xr)).abs() < 1e-13);
+        let v0 = nh.value(&x);
+        assert!(((nh.value(&rigid(&x)) - v0) / v0).abs() < 1e-12);
+        let mut g = vec![0.0; 18];
+        nh.add_gradient(&rigid(&xr), &mut g);
+        assert!(g.iter().all(|v| v.abs() < 1e-12));
+        // small strain: the linear plane-stress solid (λ* = 2μλ/(λ + 2μ)), σ_zz = 0
+        let xs: Vec<f64> = xr.iter().map(|v| v + rng.gen_range(-1e-6..1e-6)).collect();
+        let lin = LinearElastic2d::new(tris, &xr, law.mu, law.lambda, Plane::Stress);
+        let (mut gn, mut gl) = (vec![0.0; 18], vec![0.0; 18]);
+        nh.add_gradient(&xs, &mut gn);
+        lin.add_gradient(&xs, &mut gl);
+        assert!(rel(&gn, &gl) < 1e-4, "{}", rel(&gn, &gl));
+        let st = nh.element_stress(&x).unwrap();
+        assert!(st.sigma.iter().all(|s| s[(2, 2)] == 0.0));
+        let m = Elasticity {
+            mu: law.mu,
+            lambda: law.lambda,
+        };
+        assert!((m.plane_stress_lambda() - lin.law.lambda).abs() < 1e-15);
+    }
+
+    #[test]
+    fn energy_neo_hookean_cauchy_stress_of_a_uniform_stretch() {
+        // plane strain, F = diag(a, b): σ = (μ(F Fᵀ − I) + λ ln J I)/J, σ_zz = λ ln J / J
+        let law = NeoHookeanLaw {
+            mu: 1.5,
+            lambda: 0.7,
+        };
+        let (a, b) = (1.2, 0.9);
+        let f = Matrix2::new(a, 0.0, 0.0, b);
+        let s = Law::<2>::cauchy(&law, &f).unwrap();
+        let j: f64 = a * b;
+        let sxx = (law.mu * (a * a - 1.0) + law.lambda * j.ln()) / j;
+        let syy = (law.mu * (b * b - 1.0) + law.lambda * j.ln()) / j;
+        assert!((s[(0, 0)] - sxx).abs() < 1e-14 && (s[(1, 1)] - syy).abs() < 1e-14);
+        assert!((s[(2, 2)] - law.lambda * j.ln() / j).abs() < 1e-14);
+        assert_eq!(s[(0, 1)], 0.0);
     }
 }

@@ -72,6 +72,16 @@ pub const DIAG_QP_TOLS: [f64; 3] = [1e-12, 1e-10, 1e-9];
 /// Lemma 5.4 / 5.6 diagnostics of a converged run (Clarabel at the first tolerance of
 /// [`DIAG_QP_TOLS`] that solves the canonical-dual QP), and that tolerance.
 pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDiagnostics, f64)> {
+    lemma_diagnostics_with(scene, res, &DiagnosticSettings::for_eps(scene.eps))
+}
+
+/// [`lemma_diagnostics`] with other [`DiagnosticSettings`] (`contactlab run` counts the rows
+/// its last sub-problem's duals hold as active, `raw_dual_rel`).
+pub fn lemma_diagnostics_with(
+    scene: &Scene,
+    res: &RunResult,
+    settings: &DiagnosticSettings,
+) -> Result<(ConvergedDiagnostics, f64)> {
     let mut last = None;
     for tol in DIAG_QP_TOLS {
         let st = QpSettings {
@@ -90,7 +100,7 @@ pub fn lemma_diagnostics(scene: &Scene, res: &RunResult) -> Result<(ConvergedDia
             &res.last_rows,
             &res.multipliers,
             b.as_mut(),
-            &DiagnosticSettings::for_eps(scene.eps),
+            settings,
         )?;
         let solved = d.dual_qp_status == "solved";
         last = Some((d, tol));

@@ -84,6 +84,13 @@ pub struct DiagnosticSettings {
     /// Tikhonov weight τ of the canonical-dual problem, relative to the largest diagonal entry
     /// of `A Aᵀ` (see [`converged_diagnostics`]). Default `1e-10`.
     pub tikhonov_rel: f64,
+    /// With `Some(r)`, a row whose raw dual (the last sub-problem's) exceeds `r` times the
+    /// largest raw dual is active whatever its gap: a backend leaves an active row within its
+    /// own tolerance of `ε + δ`, far more than `active_tol` at small ε/h. `None` (the default
+    /// of [`DiagnosticSettings::for_eps`], what sweeps use, so that their committed columns do
+    /// not move): the gap alone decides. `contactlab run` uses `Some(1e-4)` for its
+    /// `multipliers.csv` and summary.
+    pub raw_dual_rel: Option<f64>,
 }
 
 impl DiagnosticSettings {
@@ -92,6 +99,7 @@ impl DiagnosticSettings {
         DiagnosticSettings {
             active_tol: 2.0 * (1e-6 * eps + 1e-11),
             tikhonov_rel: 1e-10,
+            raw_dual_rel: None,
         }
     }
 }
@@ -116,7 +124,14 @@ pub struct PairMultiplier {
     pub active: [bool; 4],
     /// Canonical duals of the rows, QP scaling (`h^{d−1}·λ` per row; eq. 9 and 14).
     pub mu: [f64; 4],
-    /// `λ = Σ μ / h^{d−1}`: per length in 2D (eq. 14), per area in 3D.
+    /// The pair's local size: the reference tributary measure of its point (vertex–edge,
+    /// vertex–triangle) projected normal to the pair's normal
+    /// ([`ContactAdjacency::projected`](crate::harness::contact_output::ContactAdjacency::projected)),
+    /// or the weighted mean of those of edge `a`'s ends (edge–edge, weights the closest
+    /// point's `(1 − s, s)`): a length in 2D, an area in 3D.
+    pub local_size: f64,
+    /// `λ = Σ μ / local_size`: per length in 2D (eq. 14 with the local element size in place
+    /// of the uniform h), per area in 3D.
     pub lambda: f64,
 }
 
@@ -175,19 +190,11 @@ pub enum DiagnosticsError {
     Qp(#[from] QpError),
 }
 
-/// Free dof numbering: `col[dof]`, `usize::MAX` for a fixed dof.
+/// Free dof numbering: `col[dof]`, `usize::MAX` for a prescribed dof (a fixed vertex or a
+/// supported component), the numbering of the sub-problem's QP.
 fn free_cols(mesh: &Mesh) -> (Vec<usize>, usize) {
-    let mut col = vec![usize::MAX; mesh.x_ref.len()];
-    let mut k = 0;
-    for v in 0..mesh.nv() {
-        if !mesh.fixed[v] {
-            for c in 0..mesh.dim {
-                col[mesh.dim * v + c] = k;
-                k += 1;
-            }
-        }
-    }
-    (col, k)
+    let d = crate::solve::subproblem::DofMap::new(mesh);
+    (d.col, d.nfree)
 }
 
 /// The H¹ norm `√(dᵀ G d)` of `d = x − y` on the free dofs, `G` = [`h1_gram`] (on the scene's
@@ -327,16 +334,40 @@ pub fn converged_diagnostics(
     }
 
     // Rows of T(ψ) near contact at φ_h, ψ the last sub-problem's (φ_h ≈ ψ at a fixed point;
-    // after the polish at ε, the rows φ_h satisfies with equality).
+    // after the polish at ε, the rows φ_h satisfies with equality); and (with `raw_dual_rel`)
+    // the rows the last sub-problem's duals hold: a backend leaves an active row within its
+    // own tolerance of ε + δ, which at small ε/h is far more than `active_tol`, so a row whose
+    // raw dual is above `raw_dual_rel` of the largest (an interior-point backend leaves small
+    // positive duals on inactive rows, far below 1e-4 of it) counts as active whatever its gap.
     let reach = eps + settings.active_tol + 1e-9 * eps;
-    let near = near_pairs(mesh, x, reach, true);
+    let mut near = near_pairs(mesh, x, reach, true);
+    let max_raw = last_mult
+        .iter()
+        .flat_map(|m| m.iter())
+        .fold(0.0f64, |a, &b| a.max(b));
+    let mut raw_active: HashMap<(ContactPair, usize), ()> = HashMap::new();
+    for (r, m) in last_rows.iter().zip(last_mult) {
+        for (i, &mu) in m.iter().enumerate().take(r.len) {
+            if settings
+                .raw_dual_rel
+                .is_some_and(|r| max_raw > 0.0 && mu > r * max_raw)
+            {
+                raw_active.insert((r.pair, i), ());
+            }
+        }
+    }
+    let mut extra: Vec<ContactPair> = raw_active.keys().map(|(p, _)| *p).collect();
+    extra.sort_unstable();
+    extra.dedup();
+    let listed: std::collections::HashSet<ContactPair> = near.iter().copied().collect();
+    near.extend(extra.into_iter().filter(|p| !listed.contains(p)));
     let rows = rows_for(mesh, psi, &near).ok_or(DiagnosticsError::ZeroDistance)?;
     let mut active_idx: Vec<(usize, usize)> = Vec::new(); // (pair index, row)
     let mut active_flags = vec![[false; 4]; rows.len()];
     for (k, r) in rows.iter().enumerate() {
         let v = r.values(x);
         for i in 0..r.len {
-            if v[i] - eps <= settings.active_tol {
+            if v[i] - eps <= settings.active_tol || raw_active.contains_key(&(r.pair, i)) {
                 active_idx.push((k, i));
                 active_flags[k][i] = true;
             }
@@ -409,8 +440,10 @@ pub fn converged_diagnostics(
     let mut per_element: HashMap<(u8, usize), usize> = HashMap::new();
     let mut per_vertex: HashMap<usize, usize> = HashMap::new();
     let mut lambda_sq = 0.0;
-    // h^{d−1}: λ per length in 2D, per area in 3D (eq. 14)
+    // h^{d−1}: λ per length in 2D, per area in 3D (eq. 14), for ‖λ‖_h and the bound; the
+    // pairs' λ divide by their local size
     let hd = if mesh.dim == 2 { h } else { h * h };
+    let adj = crate::harness::contact_output::ContactAdjacency::new(mesh);
     for (k, r) in rows.iter().enumerate() {
         if !active_flags[k].iter().any(|&a| a) {
             continue;
@@ -429,8 +462,23 @@ pub fn converged_diagnostics(
                 *per_element.entry((0, b)).or_insert(0) += 1;
             }
         }
-        let lambda = mu[k].iter().take(r.len).fold(0.0, |s, m| s + m) / hd;
-        lambda_sq += hd * lambda * lambda;
+        let total = mu[k].iter().take(r.len).fold(0.0, |s, m| s + m);
+        let lambda_h = total / hd;
+        lambda_sq += hd * lambda_h * lambda_h;
+        let n = [r.n.x, r.n.y, r.n.z];
+        let trib = |v: usize| adj.projected(mesh, &mesh.x_ref, v, n);
+        let local_size = match r.pair {
+            ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => trib(x),
+            ContactPair::EdgeEdge { a, .. } => {
+                let [a0, a1] = mesh.edges[a];
+                (r.weight[0] + r.weight[1]) * trib(a0) + (r.weight[2] + r.weight[3]) * trib(a1)
+            }
+        };
+        let lambda = if local_size > 0.0 {
+            total / local_size
+        } else {
+            lambda_h
+        };
         let (first, second) = r.pair.indices();
         pairs.push(PairMultiplier {
             kind: r.pair.kind(),
@@ -441,6 +489,7 @@ pub fn converged_diagnostics(
             weight: r.weight,
             active: active_flags[k],
             mu: mu[k],
+            local_size,
             lambda,
         });
     }

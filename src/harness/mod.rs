@@ -3,7 +3,8 @@
 //! ([`scene_file`]), a case
 //! (scene × backend × preset × pruning, diagnosed: [`case`]), sweeps of cases ([`sweep`]),
 //! the rows they write, one struct per kind of row ([`rows`]: where a column is added),
-//! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]) and QP
+//! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]), contact
+//! forces, pressures, gaps, reactions and stresses of a run ([`contact_output`]) and QP
 //! export ([`export`], [`capture`]).
 //!
 //! Errors here are reports to the user of the command line (`anyhow`), not values a caller
@@ -11,6 +12,7 @@
 
 pub mod capture;
 pub mod case;
+pub mod contact_output;
 pub mod diagnostics;
 pub mod dynamic_run;
 pub mod export;

@@ -8,12 +8,14 @@
 
 use crate::contact::near_pairs;
 use crate::energy::HessianModel;
-use crate::harness::diagnostics::{contact_pattern, ConvergedDiagnostics, PairMultiplier};
+use crate::harness::diagnostics::{
+    contact_pattern, ConvergedDiagnostics, DiagnosticSettings, PairMultiplier,
+};
 use crate::harness::scene_file::{self, load_scene_file};
-use crate::harness::{case, dynamic_run};
+use crate::harness::{case, contact_output, dynamic_run};
 use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
-use crate::output::vtk::write_vtu;
+use crate::output::vtk::write_vtu_with;
 use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
@@ -228,6 +230,8 @@ struct Summary {
     settings: OuterSettings,
     qp_tol: f64,
     accuracy: &'static str,
+    /// Loads, reactions and contact forces of the returned state.
+    contact: contact_output::ContactSummary,
 }
 
 /// Loads a scene file and applies its `[solver]` settings to `settings` for the keys whose
@@ -456,11 +460,16 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("runs/{}-default", scene.name)));
     let mesh = &scene.mesh;
+    let (energy, eps) = (&scene.energy, scene.eps);
     let mut frames = EveryK {
         k: a.frame_every,
         last: None,
-        inner: Frames::create(&out, mesh)?,
+        inner: Frames::create(&out, mesh)?.with_fields(Box::new(move |x, rows, mult| {
+            contact_output::frame_fields(mesh, energy, x, eps, rows, mult)
+        })),
     };
+    let mut contacts =
+        contact_output::StaticContacts::create(&out.join("contacts.csv"), mesh, energy, eps)?;
     let mut hist = History::create(&out.join("history.csv"))?;
     let mut trace = Trace::default();
     let mut progress = StaticProgress {
@@ -468,7 +477,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         pruning: rs.pruning.as_str(),
         eps: scene.eps,
     };
-    let mut files = RunDir::<OuterLoop>::new(vec![&mut hist, &mut frames]);
+    let mut files = RunDir::<OuterLoop>::new(vec![&mut hist, &mut contacts, &mut frames]);
     let mut observers: Vec<&mut dyn Observer<OuterLoop>> = vec![&mut trace, &mut files];
     if !a.quiet {
         observers.push(&mut progress);
@@ -491,15 +500,19 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     } = trace;
     // The state the run returns, its last admissible iterate, whatever the status (after an
     // inadmissible or energy-increasing step the last frame is that step's iterate).
-    write_vtu(
+    let final_fields =
+        contact_output::frame_fields(mesh, energy, &res.x, eps, &res.last_rows, &res.multipliers);
+    write_vtu_with(
         &out.join("final.vtu"),
         mesh.dim,
         &res.x,
         &mesh.edges,
         vtk_triangles(mesh),
         &mesh.tets,
-        &[],
+        &final_fields.fields(),
     )?;
+    let contact_summary =
+        contact_output::write_reactions(&out.join("reactions.csv"), &scene, &res)?;
     let near = near_pairs(mesh, &res.x, 1.01 * scene.eps, false);
     let pattern = contact_pattern(mesh, &res.x, &near, scene.eps);
     let names: Vec<[String; 2]> = pattern
@@ -547,16 +560,27 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         shapes_and_energy_svg(&shapes, &energies, &title)
     };
     write_svg(&out.join("shapes.svg"), &svg)?;
-    let diagnostics = if matches!(res.status, RunStatus::Converged | RunStatus::FixedPoint) {
-        let (diag, tol) = case::lemma_diagnostics(&scene, &res)?;
-        let mut w = csv::Writer::from_writer(Vec::new());
-        for p in &diag.pairs {
-            w.serialize(PairRow::from(p))?;
+    // multipliers.csv whatever the status (the canonical duals at the returned iterate); the
+    // summary's diagnostics for the runs at a fixed point only (converged, fixed_point)
+    let diag_settings = DiagnosticSettings {
+        raw_dual_rel: Some(1e-4),
+        ..DiagnosticSettings::for_eps(scene.eps)
+    };
+    let at_fixed_point = matches!(res.status, RunStatus::Converged | RunStatus::FixedPoint);
+    let diagnostics = match case::lemma_diagnostics_with(&scene, &res, &diag_settings) {
+        Ok((diag, tol)) => {
+            let mut w = csv::Writer::from_writer(Vec::new());
+            for p in &diag.pairs {
+                w.serialize(PairRow::from(p))?;
+            }
+            write_atomic(&out.join("multipliers.csv"), &w.into_inner()?)?;
+            at_fixed_point.then_some((diag, tol))
         }
-        write_atomic(&out.join("multipliers.csv"), &w.into_inner()?)?;
-        Some((diag, tol))
-    } else {
-        None
+        Err(e) if at_fixed_point => return Err(e),
+        Err(e) => {
+            eprintln!("multipliers.csv not written: {e:#}");
+            None
+        }
     };
     let summary = Summary {
         certificate: res.certificate.clone(),
@@ -591,6 +615,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         settings,
         qp_tol: qps.eps_abs,
         accuracy: rs.accuracy.as_str(),
+        contact: contact_summary,
     };
     write_atomic(
         &out.join("summary.json"),
@@ -716,6 +741,7 @@ struct PairRow {
     mu1: Option<f64>,
     mu2: Option<f64>,
     mu3: Option<f64>,
+    local_size: f64,
     lambda: f64,
 }
 
@@ -743,6 +769,7 @@ impl From<&PairMultiplier> for PairRow {
             mu1: m(1),
             mu2: m(2),
             mu3: m(3),
+            local_size: p.local_size,
             lambda: p.lambda,
         }
     }

@@ -1,6 +1,8 @@
 //! `contactlab plot CSV --x X --y Y[,Y2…] [--group COL[,COL…]] [--where COL=VALUE]… [--pareto]
 //! --out FILE.svg`: a log–log SVG of sweep columns, one series per group value and y column, with
 //! the fitted log–log slope of each series in its legend and on stdout (docs/sweeps.md, "Plots").
+//! With `--linear`, linear axes and no fit (profiles: a contact pressure against position),
+//! `--dashed Y` drawing reference curves dashed.
 //!
 //! `X` (and each `Y`) is a column name, `1/COL`, `max(COL,COL)` or `1/max(COL,COL)`. Only
 //! rows of runs that stopped on the outer stopping rule (`status` `converged` or
@@ -8,6 +10,7 @@
 //! not positive are skipped (log axes) and counted on stderr.
 
 use crate::output::loglog::{loglog_slope, loglog_svg, Series};
+use crate::output::timeseries::{timeseries_svg, Line};
 use crate::output::write_atomic;
 use anyhow::{bail, Context, Result};
 use std::collections::BTreeMap;
@@ -40,6 +43,13 @@ pub struct PlotArgs {
     /// Plot every row, not only those of runs stopped by the stopping rule (converged, fixed_point).
     #[arg(long)]
     pub all_statuses: bool,
+    /// Linear axes instead of log–log (values of any sign, no fitted slope): profiles such as
+    /// a contact pressure against position.
+    #[arg(long)]
+    pub linear: bool,
+    /// Y quantities drawn as dashed lines (reference curves), comma-separated; with --linear.
+    #[arg(long, value_delimiter = ',')]
+    pub dashed: Vec<String>,
     /// Title.
     #[arg(long, default_value = "")]
     pub title: String,
@@ -76,14 +86,21 @@ impl Quantity {
         Ok(Quantity { inverse, cols })
     }
 
-    fn eval(&self, idx: &BTreeMap<&str, usize>, row: &[String]) -> Option<f64> {
+    /// The value on a row; `None` if a column is empty or not a number, or (log axes, with
+    /// `positive`) the value is not positive.
+    fn eval_any(&self, idx: &BTreeMap<&str, usize>, row: &[String], positive: bool) -> Option<f64> {
         let mut v = f64::NEG_INFINITY;
         for c in &self.cols {
             let x: f64 = row[idx[c.as_str()]].parse().ok()?;
             v = v.max(x);
         }
         let v = if self.inverse { 1.0 / v } else { v };
-        (v.is_finite() && v > 0.0).then_some(v)
+        (v.is_finite() && (v > 0.0 || !positive)).then_some(v)
+    }
+
+    #[cfg(test)]
+    fn eval(&self, idx: &BTreeMap<&str, usize>, row: &[String]) -> Option<f64> {
+        self.eval_any(idx, row, true)
     }
 }
 
@@ -166,7 +183,11 @@ pub fn cmd_plot(a: &PlotArgs) -> Result<()> {
             .collect::<Vec<_>>()
             .join(" ");
         for (k, y) in ys.iter().enumerate() {
-            match (x.eval(&idx, &row), y.eval(&idx, &row)) {
+            let positive = !a.linear;
+            match (
+                x.eval_any(&idx, &row, positive),
+                y.eval_any(&idx, &row, positive),
+            ) {
                 (Some(px), Some(py)) => {
                     series.entry((g.clone(), k)).or_default().push((px, py));
                     used += 1;
@@ -184,6 +205,29 @@ pub fn cmd_plot(a: &PlotArgs) -> Result<()> {
     }
     if skipped > 0 {
         eprintln!("plot: {skipped} point(s) skipped (empty, non-numeric or not positive)");
+    }
+    if a.linear {
+        let lines: Vec<Line> = series
+            .into_iter()
+            .map(|((g, k), mut pts)| {
+                pts.sort_by(|p, q| p.0.total_cmp(&q.0));
+                let name = if ys.len() > 1 || g.is_empty() {
+                    format!("{} {}", g, a.y[k]).trim().to_string()
+                } else {
+                    g
+                };
+                println!("{name}: {} points", pts.len());
+                Line {
+                    label: name,
+                    points: pts,
+                    dashed: a.dashed.contains(&a.y[k]),
+                }
+            })
+            .collect();
+        let svg = timeseries_svg(&lines, &a.title, &a.x, &a.y.join(", "));
+        write_atomic(&a.out, svg.as_bytes()).with_context(|| format!("writing {:?}", a.out))?;
+        eprintln!("plot: wrote {:?}", a.out);
+        return Ok(());
     }
     let mut out = Vec::new();
     for ((g, k), mut pts) in series {
@@ -228,6 +272,17 @@ mod tests {
                 .unwrap()
                 .eval(&idx, &["".into(), "1".into()]),
             None
+        );
+        // linear axes keep zero and negative values, log axes drop them
+        let neg = vec!["-0.5".to_string(), "0".to_string()];
+        assert_eq!(Quantity::parse("h").unwrap().eval(&idx, &neg), None);
+        assert_eq!(
+            Quantity::parse("h").unwrap().eval_any(&idx, &neg, false),
+            Some(-0.5)
+        );
+        assert_eq!(
+            Quantity::parse("eps").unwrap().eval_any(&idx, &neg, false),
+            Some(0.0)
         );
         assert!(Quantity::parse("max(h").is_err());
         assert!(Quantity::parse("1/").is_err());

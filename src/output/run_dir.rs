@@ -15,7 +15,8 @@
 //! event at the first error and keeps the first error of the run ([`RunDir::into_result`]);
 //! the run itself goes on.
 
-use crate::output::vtk::{write_vtu, PvdSeries};
+use crate::contact::PairRows;
+use crate::output::vtk::{write_vtu_with, OwnedVtuFields, PvdSeries, VtuFields};
 use crate::scene::mesh::Mesh;
 use crate::solve::dynamics::{DynamicLoop, StepEvent, StepRecord};
 use crate::solve::observer::{EveryK, Loop, Observer};
@@ -173,6 +174,10 @@ impl Writer<DynamicLoop> for Contacts {
     }
 }
 
+/// The data arrays of a static frame, from its iterate and its step's rows and multipliers
+/// (the harness computes them: contact forces, pressures, stresses).
+pub type FieldsFn<'m> = Box<dyn FnMut(&[f64], &[PairRows], &[[f64; 4]]) -> OwnedVtuFields + 'm>;
+
 /// `frames/frame_NNNNN.vtu` and `frames.pvd` in the run directory `out`: every event it sees
 /// is a frame (thin the events with an [`EveryK`]).
 pub struct Frames<'m> {
@@ -180,6 +185,7 @@ pub struct Frames<'m> {
     mesh: &'m Mesh,
     pvd: PvdSeries,
     last: usize,
+    fields: Option<FieldsFn<'m>>,
 }
 
 impl<'m> Frames<'m> {
@@ -193,19 +199,20 @@ impl<'m> Frames<'m> {
             mesh,
             pvd: PvdSeries::default(),
             last: 0,
+            fields: None,
         })
+    }
+
+    /// Static frames with the data arrays `fields` computes.
+    pub fn with_fields(mut self, fields: FieldsFn<'m>) -> Self {
+        self.fields = Some(fields);
+        self
     }
 
     /// Writes frame `index` at `time` and rewrites the `.pvd`. The triangles shown: the solid
     /// elements in 2D, the contact faces in 3D (the surfaces' triangles and the solids'
     /// boundary).
-    fn frame(
-        &mut self,
-        index: usize,
-        time: f64,
-        x: &[f64],
-        point_data: &[(&str, &[f64])],
-    ) -> Result<()> {
+    fn frame(&mut self, index: usize, time: f64, x: &[f64], fields: &VtuFields) -> Result<()> {
         let mesh = self.mesh;
         let tris = if mesh.dim == 3 {
             &mesh.faces
@@ -213,14 +220,14 @@ impl<'m> Frames<'m> {
             &mesh.triangles
         };
         let name = format!("frame_{index:05}.vtu");
-        write_vtu(
+        write_vtu_with(
             &self.out.join("frames").join(&name),
             mesh.dim,
             x,
             &mesh.edges,
             tris,
             &mesh.tets,
-            point_data,
+            fields,
         )?;
         self.pvd.push(time, format!("frames/{name}"));
         self.pvd.write(&self.out.join("frames.pvd"))?;
@@ -234,12 +241,22 @@ impl<'m> Frames<'m> {
 impl Writer<OuterLoop> for Frames<'_> {
     fn write(&mut self, event: &OuterEvent<'_>) -> Result<()> {
         let k = event.record.iteration;
-        self.frame(k, k as f64, event.x, &[])
+        let data = self
+            .fields
+            .as_mut()
+            .map(|f| f(event.x, event.rows, event.multipliers))
+            .unwrap_or_default();
+        self.frame(k, k as f64, event.x, &data.fields())
     }
     fn finish(&mut self, outcome: &crate::solve::outer::RunResult) -> Result<()> {
         if self.last != outcome.outer_iterations {
             let k = outcome.outer_iterations;
-            self.frame(k, k as f64, &outcome.x, &[])?;
+            let data = self
+                .fields
+                .as_mut()
+                .map(|f| f(&outcome.x, &outcome.last_rows, &outcome.multipliers))
+                .unwrap_or_default();
+            self.frame(k, k as f64, &outcome.x, &data.fields())?;
         }
         Ok(())
     }
@@ -253,12 +270,11 @@ impl Writer<DynamicLoop> for Frames<'_> {
             st.v.chunks(self.mesh.dim)
                 .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
                 .collect();
-        self.frame(
-            event.record.step,
-            event.record.time,
-            &st.x,
-            &[("speed", &speed)],
-        )
+        let fields = VtuFields {
+            point_scalars: vec![("speed", &speed)],
+            ..Default::default()
+        };
+        self.frame(event.record.step, event.record.time, &st.x, &fields)
     }
 }
 

@@ -66,6 +66,63 @@ pub fn vtu_string(
     tets: &[[usize; 4]],
     point_data: &[(&str, &[f64])],
 ) -> io::Result<String> {
+    let fields = VtuFields {
+        point_scalars: point_data.to_vec(),
+        ..Default::default()
+    };
+    vtu_string_with(dim, x, edges, triangles, tets, &fields)
+}
+
+/// The data arrays of a `.vtu` besides the cell array `kind`: scalar point arrays (one value
+/// per point), vector point arrays (three values per point, `x y z`, flat) and scalar cell
+/// arrays (one value per cell, in the cells' order: edges, then triangles, then tets). All
+/// `Float64`.
+#[derive(Clone, Debug, Default)]
+pub struct VtuFields<'a> {
+    /// `(name, values)`, one value per point.
+    pub point_scalars: Vec<(&'a str, &'a [f64])>,
+    /// `(name, values)`, three values per point.
+    pub point_vectors: Vec<(&'a str, &'a [f64])>,
+    /// `(name, values)`, one value per cell.
+    pub cell_scalars: Vec<(&'a str, &'a [f64])>,
+}
+
+/// [`VtuFields`] that own their arrays (what an observer computes per frame).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OwnedVtuFields {
+    /// `(name, values)`, one value per point.
+    pub point_scalars: Vec<(String, Vec<f64>)>,
+    /// `(name, values)`, three values per point.
+    pub point_vectors: Vec<(String, Vec<f64>)>,
+    /// `(name, values)`, one value per cell.
+    pub cell_scalars: Vec<(String, Vec<f64>)>,
+}
+
+impl OwnedVtuFields {
+    /// The borrowed view.
+    pub fn fields(&self) -> VtuFields<'_> {
+        fn view(v: &[(String, Vec<f64>)]) -> Vec<(&str, &[f64])> {
+            v.iter().map(|(n, a)| (n.as_str(), a.as_slice())).collect()
+        }
+        VtuFields {
+            point_scalars: view(&self.point_scalars),
+            point_vectors: view(&self.point_vectors),
+            cell_scalars: view(&self.cell_scalars),
+        }
+    }
+}
+
+/// [`vtu_string`] with vector point data and scalar cell data ([`VtuFields`]). Errors also
+/// when an array has the wrong length.
+pub fn vtu_string_with(
+    dim: usize,
+    x: &[f64],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    tets: &[[usize; 4]],
+    fields: &VtuFields,
+) -> io::Result<String> {
+    let point_data = &fields.point_scalars;
     if dim != 2 && dim != 3 {
         return Err(invalid(format!("write_vtu: dim must be 2 or 3, got {dim}")));
     }
@@ -106,6 +163,23 @@ pub fn vtu_string(
             )));
         }
     }
+    for (name, vals) in &fields.point_vectors {
+        if vals.len() != 3 * n_points {
+            return Err(invalid(format!(
+                "write_vtu: point vector '{name}' has {} values, expected {}",
+                vals.len(),
+                3 * n_points
+            )));
+        }
+    }
+    for (name, vals) in &fields.cell_scalars {
+        if vals.len() != n_cells {
+            return Err(invalid(format!(
+                "write_vtu: cell data '{name}' has {} values, expected {n_cells}",
+                vals.len()
+            )));
+        }
+    }
 
     let mut s = String::new();
     // `write!` into a String cannot fail; the results are ignored below.
@@ -118,18 +192,30 @@ pub fn vtu_string(
     );
 
     // Point data.
-    if point_data.is_empty() {
+    if point_data.is_empty() && fields.point_vectors.is_empty() {
         s.push_str("      <PointData>\n      </PointData>\n");
     } else {
-        let _ = writeln!(
-            s,
-            "      <PointData Scalars=\"{}\">",
-            xml_escape(point_data[0].0)
-        );
+        s.push_str("      <PointData");
+        if let Some((name, _)) = point_data.first() {
+            let _ = write!(s, " Scalars=\"{}\"", xml_escape(name));
+        }
+        if let Some((name, _)) = fields.point_vectors.first() {
+            let _ = write!(s, " Vectors=\"{}\"", xml_escape(name));
+        }
+        s.push_str(">\n");
         for (name, vals) in point_data {
             let _ = writeln!(
                 s,
                 "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"1\" format=\"ascii\">",
+                xml_escape(name)
+            );
+            push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
+            s.push_str("        </DataArray>\n");
+        }
+        for (name, vals) in &fields.point_vectors {
+            let _ = writeln!(
+                s,
+                "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">",
                 xml_escape(name)
             );
             push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
@@ -152,6 +238,15 @@ pub fn vtu_string(
         20,
     );
     s.push_str("        </DataArray>\n");
+    for (name, vals) in &fields.cell_scalars {
+        let _ = writeln!(
+            s,
+            "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"1\" format=\"ascii\">",
+            xml_escape(name)
+        );
+        push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
+        s.push_str("        </DataArray>\n");
+    }
     s.push_str("      </CellData>\n");
 
     // Points (always 3 components).
@@ -259,6 +354,35 @@ pub fn write_vtu(
 ) -> io::Result<()> {
     let s = vtu_string(dim, x, edges, triangles, tets, point_data)?;
     write_atomic(path, s.as_bytes())
+}
+
+/// [`write_vtu`] with the arrays of [`VtuFields`] (vector point data, scalar cell data).
+#[allow(clippy::too_many_arguments)]
+pub fn write_vtu_with(
+    path: &Path,
+    dim: usize,
+    x: &[f64],
+    edges: &[[usize; 2]],
+    triangles: &[[usize; 3]],
+    tets: &[[usize; 4]],
+    fields: &VtuFields,
+) -> io::Result<()> {
+    let s = vtu_string_with(dim, x, edges, triangles, tets, fields)?;
+    write_atomic(path, s.as_bytes())
+}
+
+/// The values of the data array `name` of a `.vtu` written by this module (point or cell
+/// data, all components flat), parsed back; `None` if there is no such array or a value does
+/// not parse. For reading outputs back in tests and scripts.
+pub fn vtu_array(text: &str, name: &str) -> Option<Vec<f64>> {
+    let key = format!("Name=\"{}\"", xml_escape(name));
+    let start = text.find(&key)?;
+    let open_end = start + text[start..].find('>')? + 1;
+    let close = open_end + text[open_end..].find("</DataArray>")?;
+    text[open_end..close]
+        .split_whitespace()
+        .map(|v| v.parse::<f64>().ok())
+        .collect()
 }
 
 /// A ParaView `.pvd` collection: a time series of data files.
@@ -544,6 +668,49 @@ mod tests {
         assert_eq!(pts.len(), 12);
         assert!(pts.iter().skip(2).step_by(3).all(|&z| z == 0.0));
         assert_eq!(data_array(&s, "types"), vec!["10"]);
+    }
+
+    #[test]
+    fn vtu_vectors_and_cell_data_round_trip() {
+        let (x, edges, tris) = square();
+        let disp: Vec<f64> = (0..12).map(|k| k as f64 * 0.25 - 1.0).collect();
+        let p: Vec<f64> = vec![0.5, f64::NAN, 2.0, 1e-300];
+        let cells: Vec<f64> = (0..6).map(|k| -(k as f64) / 3.0).collect();
+        let fields = VtuFields {
+            point_scalars: vec![("p", &p)],
+            point_vectors: vec![("displacement", &disp)],
+            cell_scalars: vec![("von_mises", &cells)],
+        };
+        let text = vtu_string_with(2, &x, &edges, &tris, &[], &fields).unwrap();
+        assert!(text.contains("<PointData Scalars=\"p\" Vectors=\"displacement\">"));
+        assert!(text.contains("Name=\"displacement\" NumberOfComponents=\"3\""));
+        assert_eq!(vtu_array(&text, "displacement").unwrap(), disp);
+        assert_eq!(vtu_array(&text, "von_mises").unwrap(), cells);
+        let back = vtu_array(&text, "p").unwrap();
+        assert!(back[1].is_nan() && back[0] == 0.5 && back[3] == 1e-300);
+        assert_eq!(vtu_array(&text, "kind").unwrap().len(), 6);
+        assert!(vtu_array(&text, "nothing").is_none());
+        // wrong lengths are named errors
+        let short_vectors = VtuFields {
+            point_vectors: vec![("displacement", &disp[..9])],
+            ..Default::default()
+        };
+        let short_cells = VtuFields {
+            cell_scalars: vec![("s", &cells[..5])],
+            ..Default::default()
+        };
+        for (bad, msg) in [
+            (short_vectors, "'displacement' has 9 values, expected 12"),
+            (short_cells, "cell data 's' has 5 values, expected 6"),
+        ] {
+            let e = vtu_string_with(2, &x, &edges, &tris, &[], &bad).unwrap_err();
+            assert!(e.to_string().contains(msg), "{e}");
+        }
+        // without the new arrays the document is the one write_vtu always wrote
+        assert_eq!(
+            vtu_string_with(2, &x, &edges, &tris, &[], &VtuFields::default()).unwrap(),
+            vtu_string(2, &x, &edges, &tris, &[], &[]).unwrap()
+        );
     }
 
     #[test]

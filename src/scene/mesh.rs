@@ -80,6 +80,17 @@ pub enum MeshError {
         /// The value.
         value: f64,
     },
+    /// `fixed_dof` has the wrong length, or a vertex has every component prescribed in
+    /// `fixed_dof` without being `fixed`.
+    #[error("fixed_dof has {len} entries for {ndof} degrees of freedom, or vertex {vertex} has every component prescribed but is not fixed")]
+    Fixity {
+        /// Length of `fixed_dof`.
+        len: usize,
+        /// `dim·nv`.
+        ndof: usize,
+        /// The first inconsistent vertex (`usize::MAX` for a length mismatch).
+        vertex: usize,
+    },
     /// The contact filter was built for another mesh (vertex, element or body counts differ).
     #[error("the contact filter was built for another mesh (rebuild it after the last change)")]
     StaleFilter,
@@ -105,8 +116,16 @@ pub struct Mesh {
     /// Reference positions, flat (`dim` per vertex). Also the initial state unless a scene
     /// provides another.
     pub x_ref: Vec<f64>,
-    /// `fixed[v]`: vertex `v` is a Dirichlet vertex (never moves).
+    /// `fixed[v]`: vertex `v` is a Dirichlet vertex (never moves): every one of its degrees of
+    /// freedom is prescribed. The pair search leaves out the pairs whose vertices are all
+    /// fixed.
     pub fixed: Vec<bool>,
+    /// Per degree of freedom (`dim·v + k`): component `k` of vertex `v` is prescribed (a
+    /// roller, a symmetry plane, a prescribed displacement of chosen components). Empty when
+    /// no vertex is supported in only some components; otherwise `dim·nv` entries, and a
+    /// vertex with every component prescribed is also `fixed` ([`Mesh::fix_component`] keeps
+    /// that so, [`Mesh::validate`] checks it). Read it through [`Mesh::dof_fixed`].
+    pub fixed_dof: Vec<bool>,
     /// All contact edges, as vertex pairs.
     pub edges: Vec<[usize; 2]>,
     /// Body owning each contact edge.
@@ -241,6 +260,26 @@ impl Mesh {
         self.x_ref.len() / self.dim
     }
 
+    /// Whether degree of freedom `dof` (`dim·v + k`) is prescribed: its vertex is fixed, or
+    /// that component is supported.
+    #[inline]
+    pub fn dof_fixed(&self, dof: usize) -> bool {
+        self.fixed[dof / self.dim] || self.fixed_dof.get(dof).copied().unwrap_or(false)
+    }
+
+    /// Prescribes component `k` of vertex `v` (a support); the vertex becomes fixed when every
+    /// one of its components is.
+    pub fn fix_component(&mut self, v: usize, k: usize) {
+        if self.fixed_dof.is_empty() {
+            self.fixed_dof = vec![false; self.x_ref.len()];
+        }
+        let d = self.dim;
+        self.fixed_dof[d * v + k] = true;
+        if (0..d).all(|c| self.fixed_dof[d * v + c]) {
+            self.fixed[v] = true;
+        }
+    }
+
     /// Position of vertex `v` in the flat array `x`, as a 2-vector.
     #[inline]
     pub fn p2(x: &[f64], v: usize) -> nalgebra::Vector2<f64> {
@@ -280,6 +319,37 @@ impl Mesh {
         (0..self.nv()).filter(|&v| seen[v]).collect()
     }
 
+    /// The tributary measure of each vertex on the contact elements at `x`: in 2D half the
+    /// length of its contact edges; in 3D a third of the area of its contact faces, or, for a
+    /// vertex on no contact face (a curve's), half the length of its contact edges. 0 for a
+    /// vertex on no contact element. The local size by which a contact force becomes a
+    /// pressure (a force per length in 2D, per area in 3D).
+    pub fn tributary(&self, x: &[f64]) -> Vec<f64> {
+        let nv = self.nv();
+        let mut area = vec![0.0; nv];
+        for f in &self.faces {
+            let (a, b, c) = (
+                self.point(x, f[0]),
+                self.point(x, f[1]),
+                self.point(x, f[2]),
+            );
+            let third = (b - a).cross(&(c - a)).norm() / 6.0;
+            for &v in f {
+                area[v] += third;
+            }
+        }
+        let mut length = vec![0.0; nv];
+        for e in &self.edges {
+            let half = 0.5 * (self.point(x, e[0]) - self.point(x, e[1])).norm();
+            length[e[0]] += half;
+            length[e[1]] += half;
+        }
+        area.iter()
+            .zip(&length)
+            .map(|(&a, &l)| if a > 0.0 { a } else { l })
+            .collect()
+    }
+
     /// Checks the dimension, indices, finiteness and non-degenerate reference elements.
     pub fn validate(&self) -> Result<(), MeshError> {
         if self.dim != 2 && self.dim != 3 {
@@ -293,6 +363,22 @@ impl Mesh {
             });
         }
         let nv = self.nv();
+        if !self.fixed_dof.is_empty() {
+            let d = self.dim;
+            let bad = |vertex| MeshError::Fixity {
+                len: self.fixed_dof.len(),
+                ndof: d * nv,
+                vertex,
+            };
+            if self.fixed_dof.len() != d * nv {
+                return Err(bad(usize::MAX));
+            }
+            if let Some(v) =
+                (0..nv).find(|&v| !self.fixed[v] && (0..d).all(|k| self.fixed_dof[d * v + k]))
+            {
+                return Err(bad(v));
+            }
+        }
         if let Some(f) = self.filter() {
             if f.vb_start.len() != nv + 1
                 || f.edge_body.len() != self.edges.len()
@@ -380,5 +466,84 @@ impl Mesh {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles of the unit square, one solid body.
+    fn square() -> Mesh {
+        Mesh {
+            dim: 2,
+            x_ref: vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0],
+            fixed: vec![false; 4],
+            edges: vec![[0, 1], [1, 2], [2, 3], [3, 0]],
+            edge_body: vec![0; 4],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            bodies: vec![Body {
+                name: "square".into(),
+                kind: BodyKind::Solid,
+                vertices: vec![0, 1, 2, 3],
+                edges: vec![0, 1, 2, 3],
+                triangles: vec![0, 1],
+                ..Default::default()
+            }],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn mesh_fixity_per_dof_and_fixed_vertices() {
+        let mut m = square();
+        assert!(m.fixed_dof.is_empty() && (0..8).all(|d| !m.dof_fixed(d)));
+        // a roller: vertex 1 held in y only
+        m.fix_component(1, 1);
+        assert_eq!(m.fixed_dof.len(), 8);
+        assert!(m.dof_fixed(3) && !m.dof_fixed(2) && !m.fixed[1]);
+        // both components: the vertex is fixed (the pair search's all-fixed pairs)
+        m.fix_component(1, 0);
+        assert!(m.fixed[1] && m.dof_fixed(2));
+        m.validate().unwrap();
+        // a fixed vertex has every dof fixed without fixed_dof
+        m.fixed[3] = true;
+        assert!(m.dof_fixed(6) && m.dof_fixed(7));
+        // inconsistent: every component prescribed but the vertex not fixed
+        let mut bad = square();
+        bad.fixed_dof = vec![false, false, true, true, false, false, false, false];
+        assert_eq!(
+            bad.validate(),
+            Err(MeshError::Fixity {
+                len: 8,
+                ndof: 8,
+                vertex: 1
+            })
+        );
+        bad.fixed_dof.pop();
+        assert!(matches!(
+            bad.validate(),
+            Err(MeshError::Fixity { len: 7, .. })
+        ));
+    }
+
+    #[test]
+    fn mesh_tributary_lengths_and_areas() {
+        let m = square();
+        // every vertex of the unit square: half of two unit edges
+        assert_eq!(m.tributary(&m.x_ref), vec![1.0; 4]);
+        let x: Vec<f64> = m.x_ref.iter().map(|v| 2.0 * v).collect();
+        assert_eq!(m.tributary(&x), vec![2.0; 4]);
+        // 3D: a unit right triangle face (area 1/2): a third to each vertex
+        let m3 = Mesh {
+            dim: 3,
+            x_ref: vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            fixed: vec![false; 3],
+            faces: vec![[0, 1, 2]],
+            edges: vec![[0, 1], [1, 2], [2, 0]],
+            ..Default::default()
+        };
+        let t = m3.tributary(&m3.x_ref);
+        assert!(t.iter().all(|a| (a - 1.0 / 6.0).abs() < 1e-15), "{t:?}");
     }
 }

@@ -21,12 +21,13 @@
 //! | 2D curve | `String`: [`MembraneEnergy`] | [`GasEnergy`], V the area closed by the curve (or its chord) | [`PressureEnergy`] |
 //! | 3D curve | `String`: [`String3dEnergy`] | — | — |
 //! | surface | `StvkMembrane`: [`Membrane3dEnergy`] | [`Gas3dEnergy`], V the volume of the closed surface | — |
-//! | 2D solid | `NeoHookean`: [`NeoHookean2d`] | — | — |
-//! | 3D solid | `NeoHookean`: [`NeoHookean3d`] | — | — |
+//! | 2D solid | `NeoHookean`: [`NeoHookean2d`] (plane strain); `NeoHookeanPlaneStress`: [`NeoHookeanPlaneStress2d`]; `LinearElastic`: [`LinearElastic2d`] (plane strain or stress) | — | — |
+//! | 3D solid | `NeoHookean`: [`NeoHookean3d`]; `LinearElastic`: [`LinearElastic3d`] | — | — |
 //!
 //! Gravity is `−Σ_v m_v g·x_v` ([`Gravity`]) on the lumped masses of the bodies that have a
 //! density ([`crate::energy::mass`], the masses of time stepping too); it is a term whenever
-//! the scene has a gravity vector, even if no body has a density.
+//! the scene has a gravity vector, even if no body has a density. Dead loads (a scene file's
+//! tractions and point forces, one [`DeadLoad`]) come after gravity (docs/materials.md).
 //!
 //! Built-in scenes describe their bodies as a [`Physics`] and call [`assemble_energy`]. A scene
 //! file checks each key where it reads it, and reports a fault with the line of that key, so
@@ -35,8 +36,9 @@
 
 use crate::energy::mass::add_body_mass;
 use crate::energy::{
-    DegenerateTet, Energy, Gas3dEnergy, GasEnergy, Gravity, Membrane3dEnergy, MembraneEnergy,
-    NeoHookean2d, NeoHookean3d, OpenSurface, PressureEnergy, String3dEnergy, TotalEnergy,
+    DeadLoad, DegenerateTet, Energy, Gas3dEnergy, GasEnergy, Gravity, LinearElastic2d,
+    LinearElastic3d, Membrane3dEnergy, MembraneEnergy, NeoHookean2d, NeoHookean3d,
+    NeoHookeanPlaneStress2d, OpenSurface, Plane, PressureEnergy, String3dEnergy, TotalEnergy,
 };
 use crate::scene::file::topology::chain;
 use crate::scene::mesh::{BodyKind, Mesh};
@@ -59,12 +61,28 @@ pub enum Material {
         /// λ.
         lambda: f64,
     },
-    /// Compressible neo-Hookean P1 simplices (2D and 3D solids).
+    /// Compressible neo-Hookean P1 simplices (2D solids in plane strain, 3D solids).
     NeoHookean {
         /// μ.
         mu: f64,
         /// λ.
         lambda: f64,
+    },
+    /// Compressible neo-Hookean P1 triangles in plane stress (2D solids).
+    NeoHookeanPlaneStress {
+        /// μ.
+        mu: f64,
+        /// λ (of the 3D material).
+        lambda: f64,
+    },
+    /// Small-strain linear elasticity (2D solids in plane strain or stress, 3D solids).
+    LinearElastic {
+        /// μ.
+        mu: f64,
+        /// λ (of the 3D material).
+        lambda: f64,
+        /// Plane strain or stress (ignored in 3D).
+        plane: Plane,
     },
 }
 
@@ -94,7 +112,17 @@ impl Material {
         match self {
             Material::String { .. } => "string",
             Material::StvkMembrane { .. } => "stvk-membrane",
-            Material::NeoHookean { .. } => "neo-hookean",
+            Material::NeoHookean { .. } | Material::NeoHookeanPlaneStress { .. } => "neo-hookean",
+            Material::LinearElastic { .. } => "linear-elastic",
+        }
+    }
+
+    /// Whether a body of `kind` takes it: a solid takes `neo-hookean` or `linear-elastic`,
+    /// the other kinds their [`Material::model_for`].
+    pub fn fits(&self, kind: BodyKind) -> bool {
+        match kind {
+            BodyKind::Solid => matches!(self.model(), "neo-hookean" | "linear-elastic"),
+            _ => self.model() == Material::model_for(kind),
         }
     }
 }
@@ -145,7 +173,7 @@ pub enum TermError {
     /// A material that does not fit the body's kind.
     #[error(
         "a {kind} body takes model = {expected:?}, not {model:?} (models: string for curves, \
-         stvk-membrane for 3D surfaces, neo-hookean for solids)"
+         stvk-membrane for 3D surfaces, neo-hookean or linear-elastic for solids)"
     )]
     MaterialKind {
         /// The body's kind, in lower case.
@@ -158,6 +186,9 @@ pub enum TermError {
     /// The bodies of a joined elastic term do not share one material.
     #[error("one elastic term over several bodies needs one material, got {0:?} and {1:?}")]
     JoinedMaterials(Material, Material),
+    /// Plane stress asked of a 3D solid.
+    #[error("plane stress is a choice of 2D solids")]
+    PlaneStress3d,
     /// A reference tetrahedron of zero volume.
     #[error(transparent)]
     DegenerateTet(#[from] DegenerateTet),
@@ -183,6 +214,8 @@ pub struct EnergyAssembler<'a> {
     energy: TotalEnergy,
     /// The lumped masses of the bodies with a density, so far.
     mass: Vec<f64>,
+    /// The dead loads, a term after gravity.
+    dead: Option<DeadLoad>,
 }
 
 impl<'a> EnergyAssembler<'a> {
@@ -194,6 +227,7 @@ impl<'a> EnergyAssembler<'a> {
             x0,
             energy: TotalEnergy::default(),
             mass: vec![0.0; mesh.nv()],
+            dead: None,
         }
     }
 
@@ -219,7 +253,7 @@ impl<'a> EnergyAssembler<'a> {
         let m = self.mesh;
         let kind = m.bodies[bodies[0]].kind;
         let expected = Material::model_for(kind);
-        if material.model() != expected || bodies.iter().any(|&b| m.bodies[b].kind != kind) {
+        if !material.fits(kind) || bodies.iter().any(|&b| m.bodies[b].kind != kind) {
             return Err(TermError::MaterialKind {
                 kind: format!("{kind:?}").to_lowercase(),
                 model: material.model(),
@@ -250,6 +284,22 @@ impl<'a> EnergyAssembler<'a> {
                     .flat_map(|&b| m.bodies[b].tets.iter().map(|&t| m.tets[t]))
                     .collect();
                 Box::new(NeoHookean3d::new(tets, x_ref, mu, lambda)?)
+            }
+            (Material::NeoHookeanPlaneStress { mu, lambda }, _, 2) => {
+                let tris = bodies.iter().flat_map(|&b| self.triangles(b)).collect();
+                Box::new(NeoHookeanPlaneStress2d::new(tris, x_ref, mu, lambda))
+            }
+            (Material::NeoHookeanPlaneStress { .. }, _, _) => return Err(TermError::PlaneStress3d),
+            (Material::LinearElastic { mu, lambda, plane }, _, 2) => {
+                let tris = bodies.iter().flat_map(|&b| self.triangles(b)).collect();
+                Box::new(LinearElastic2d::new(tris, x_ref, mu, lambda, plane))
+            }
+            (Material::LinearElastic { mu, lambda, .. }, _, _) => {
+                let tets = bodies
+                    .iter()
+                    .flat_map(|&b| m.bodies[b].tets.iter().map(|&t| m.tets[t]))
+                    .collect();
+                Box::new(LinearElastic3d::new(tets, x_ref, mu, lambda)?)
             }
         };
         self.energy.terms.push(term);
@@ -297,8 +347,13 @@ impl<'a> EnergyAssembler<'a> {
         add_body_mass(&mut self.mass, self.mesh, &self.mesh.x_ref, b, rho);
     }
 
+    /// The dead loads (tractions, pressures, point forces), a term after gravity.
+    pub fn dead_load(&mut self, load: DeadLoad) {
+        self.dead = Some(load);
+    }
+
     /// The energy: the terms so far, then gravity `g` (`dim` components) on the masses
-    /// loaded, if given.
+    /// loaded, if given, then the dead loads, if any.
     pub fn finish(mut self, gravity: Option<&[f64]>) -> TotalEnergy {
         if let Some(g) = gravity {
             let term: Box<dyn Energy> = if self.mesh.dim == 3 {
@@ -307,6 +362,9 @@ impl<'a> EnergyAssembler<'a> {
                 Box::new(Gravity::new(self.mass, [g[0], g[1]]))
             };
             self.energy.terms.push(term);
+        }
+        if let Some(load) = self.dead {
+            self.energy.terms.push(Box::new(load));
         }
         self.energy
     }
@@ -522,7 +580,7 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "a solid body takes model = \"neo-hookean\", not \"string\" (models: string for \
-             curves, stvk-membrane for 3D surfaces, neo-hookean for solids)"
+             curves, stvk-membrane for 3D surfaces, neo-hookean or linear-elastic for solids)"
         );
         assert!(a.finish(None).terms.is_empty());
     }

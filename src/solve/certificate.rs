@@ -9,7 +9,10 @@
 //! ```
 //!
 //! * `d_k` is the distance of a pair `k` of disjoint contact elements whose distance is
-//!   within `active_tol` of ε, and `∇d_k` its gradient on the free dofs. With `n` the unit
+//!   within `active_tol` of ε, or that the last sub-problem held with a multiplier above
+//!   `1e-4` of the largest (a backend leaves an active row within its own tolerance of
+//!   ε + δ, which can exceed `active_tol`: on Hertz 2D at `qp_tol = 1e-11`, 1e-9 above),
+//!   and `∇d_k` its gradient on the free dofs. With `n` the unit
 //!   vector from the closest point of the first element to that of the second and the
 //!   closest points' barycentric weights (eq. 8, 12, 13):
 //!   - `point_edge` (2D): `−n` at x, `α_i n` at a_i;
@@ -68,6 +71,10 @@ const PIVOT_TOL: f64 = 1e-12;
 /// passive set ill-conditioned (its condition number squares that of the columns).
 const WARM_PIVOT_TOL: f64 = 1e-6;
 
+/// A pair whose multiplier in the last sub-problem exceeds this fraction of the largest one is
+/// a generator whatever its gap (the diagnostics' `raw_dual_rel`).
+const HELD_REL: f64 = 1e-4;
+
 /// Why the certificate could not be computed.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum CertificateError {
@@ -90,7 +97,8 @@ pub struct Certificate {
     pub term_force: f64,
     /// `S = max(gradient, term_force)`.
     pub scale: f64,
-    /// Pairs at distance ε (within `active_tol`).
+    /// Pairs at distance ε (within `active_tol`) or held by the last sub-problem (a multiplier
+    /// above `1e-4` of the largest).
     pub pairs: usize,
     /// Constraint gradients (the pairs', and the endpoint distances of parallel edges).
     pub generators: usize,
@@ -166,23 +174,33 @@ pub(crate) fn gradient_entries(
     out
 }
 
-/// The constraint gradients at `x` of the pairs within `eps + active_tol`, in the order of
-/// the broad phase (deterministic), with the count of pairs.
+/// The constraint gradients at `x` of the pairs within `eps + active_tol`, and of the pairs
+/// in `held` (the pairs the last sub-problem held, whatever their gap), in the order of the
+/// broad phase (deterministic), with the count of pairs.
 fn generators(
     mesh: &Mesh,
     x: &[f64],
     eps: f64,
     active_tol: f64,
+    held: &HashMap<ContactPair, f64>,
     col: &[usize],
 ) -> Result<(Vec<Generator>, usize), CertificateError> {
     let reach = eps + active_tol;
-    let near = near_pairs(mesh, x, reach * (1.0 + 1e-9), true);
+    let mut near = near_pairs(mesh, x, reach * (1.0 + 1e-9), true);
+    let known: std::collections::HashSet<ContactPair> = near.iter().copied().collect();
+    let mut extra: Vec<ContactPair> = held
+        .keys()
+        .filter(|p| !known.contains(p))
+        .copied()
+        .collect();
+    extra.sort_unstable();
+    near.extend(extra);
     let dim = mesh.dim;
     let mut out = Vec::new();
     let mut pairs = 0;
     for p in near {
         let r = pair_rows(mesh, x, p).ok_or(CertificateError::ZeroDistance(p))?;
-        if r.distance > reach {
+        if r.distance > reach && !held.contains_key(&p) {
             continue;
         }
         pairs += 1;
@@ -324,7 +342,16 @@ pub fn certificate(
     let free: &H1Norm = &norms.free;
     let (gnorm, term_force, g, _) = forces(energy, x, norms);
     let scale = gnorm.max(term_force);
-    let (gens, pairs) = generators(mesh, x, eps, active_tol, &free.col)?;
+    // A pair the last sub-problem held with a multiplier above HELD_REL of the largest counts
+    // as active whatever its gap (as in the diagnostics): a backend leaves an active row
+    // within its own tolerance of ε + δ, which can exceed `active_tol`.
+    let wmax = warm.values().fold(0.0f64, |m, &v| m.max(v));
+    let held: HashMap<ContactPair, f64> = warm
+        .iter()
+        .filter(|(_, &v)| wmax > 0.0 && v > HELD_REL * wmax)
+        .map(|(&p, &v)| (p, v))
+        .collect();
+    let (gens, pairs) = generators(mesh, x, eps, active_tol, &held, &free.col)?;
     let warm: Vec<f64> = gens
         .iter()
         .map(|b| {
@@ -859,7 +886,7 @@ mod tests {
     /// the distances are smooth there, so the error is O(1e-12)).
     fn check_generators(mesh: &Mesh, x: &[f64], skip_part0: bool) -> usize {
         let (col, _) = crate::solve::h1::dof_columns(mesh, true);
-        let (gens, _) = generators(mesh, x, 0.0, 10.0, &col).unwrap();
+        let (gens, _) = generators(mesh, x, 0.0, 10.0, &HashMap::new(), &col).unwrap();
         let mut checked = 0;
         for gen in &gens {
             if skip_part0 && gen.part == 0 {
@@ -946,11 +973,31 @@ mod tests {
         ];
         let mesh = two_edges(3, &x, vec![false; 4]);
         let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
-        let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &col).unwrap();
+        let (gens, pairs) = generators(&mesh, &x, 0.1, 1e-9, &HashMap::new(), &col).unwrap();
         assert_eq!(pairs, 1);
         let parts: Vec<u8> = gens.iter().map(|g| g.part).collect();
         // a1 = (1, 0, 0) projects inside b, b0 = (0.4, 0.1, 0) inside a: parts 2 and 3
         assert_eq!(parts, vec![0, 2, 3]);
         assert_eq!(check_generators(&mesh, &x, true), 4);
+    }
+
+    #[test]
+    fn certificate_counts_a_pair_the_sub_problem_held_beyond_the_tolerance() {
+        // The same rods 1e-9 farther apart than ε + active_tol: not a generator by its gap,
+        // a generator when the last sub-problem held it.
+        let x = vec![
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, //
+            0.4, 0.1, 0.0, 1.6, 0.1, 0.0,
+        ];
+        let mesh = two_edges(3, &x, vec![false; 4]);
+        let (col, _) = crate::solve::h1::dof_columns(&mesh, true);
+        let eps = 0.1 - 2e-9;
+        let (gens, pairs) = generators(&mesh, &x, eps, 1e-9, &HashMap::new(), &col).unwrap();
+        assert_eq!((gens.len(), pairs), (0, 0));
+        let pair = near_pairs(&mesh, &x, 0.2, true)[0];
+        let held = HashMap::from([(pair, 1.0)]);
+        let (gens, pairs) = generators(&mesh, &x, eps, 1e-9, &held, &col).unwrap();
+        assert_eq!(pairs, 1);
+        assert_eq!(gens[0].pair, pair);
     }
 }

@@ -543,7 +543,7 @@ pub fn simulate_observed(
         return Err(DynamicsError::BadVelocity { dof, value });
     }
     let start = Instant::now();
-    let free = |i: usize| !mesh.fixed[i / d];
+    let free = |i: usize| !mesh.dof_fixed(i);
     let mut v: Vec<f64> = (0..n).map(|i| if free(i) { v0[i] } else { 0.0 }).collect();
     let mut a = vec![0.0; n];
     if settings.scheme == Scheme::Newmark {

@@ -31,17 +31,16 @@ pub enum H1Error {
     NotDefinite,
 }
 
-/// `col[dof]`: the column of each dof of `mesh` (free dofs only when `free_only`, in vertex
-/// order; `usize::MAX` for a dof left out), and the number of columns.
+/// `col[dof]`: the column of each dof of `mesh` (free dofs only when `free_only` —
+/// [`Mesh::dof_fixed`]: fixed vertices and supported components are not free —, in dof order;
+/// `usize::MAX` for a dof left out), and the number of columns.
 pub fn dof_columns(mesh: &Mesh, free_only: bool) -> (Vec<usize>, usize) {
     let mut col = vec![usize::MAX; mesh.x_ref.len()];
     let mut k = 0;
-    for v in 0..mesh.nv() {
-        if !(free_only && mesh.fixed[v]) {
-            for c in 0..mesh.dim {
-                col[mesh.dim * v + c] = k;
-                k += 1;
-            }
+    for (dof, c) in col.iter_mut().enumerate() {
+        if !(free_only && mesh.dof_fixed(dof)) {
+            *c = k;
+            k += 1;
         }
     }
     (col, k)

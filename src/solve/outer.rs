@@ -702,6 +702,10 @@ pub struct OuterEvent<'a> {
     pub record: &'a IterationRecord,
     /// The step's iterate (the sub-problem's solution, admissible or not).
     pub x: &'a [f64],
+    /// The rows of the step's last QP (empty at iteration 0).
+    pub rows: &'a [PairRows],
+    /// Their multipliers (`μ ≥ 0`, one per row of each pair; empty at iteration 0).
+    pub multipliers: &'a [[f64; 4]],
 }
 
 impl Loop for OuterLoop {
@@ -820,6 +824,8 @@ pub fn run_observed(
             rejections: 0,
         },
         x: &x,
+        rows: &[],
+        multipliers: &[],
     });
     let mut result = RunResult {
         x: Vec::new(),
@@ -902,6 +908,8 @@ pub fn run_observed(
         observer.iteration(&OuterEvent {
             record: &step.record,
             x: &sub.y,
+            rows: &sub.rows,
+            multipliers: &sub.multipliers,
         });
         if !step.record.admissible {
             result.status = RunStatus::Inadmissible;

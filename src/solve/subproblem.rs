@@ -221,16 +221,15 @@ pub struct DofMap {
 }
 
 impl DofMap {
-    /// Free dofs of `mesh`, in vertex order.
+    /// Free dofs of `mesh` ([`Mesh::dof_fixed`]: fixed vertices and supported components are
+    /// not free), in dof order.
     pub fn new(mesh: &Mesh) -> Self {
         let mut col = vec![usize::MAX; mesh.x_ref.len()];
         let mut k = 0;
-        for v in 0..mesh.nv() {
-            if !mesh.fixed[v] {
-                for c in 0..mesh.dim {
-                    col[mesh.dim * v + c] = k;
-                    k += 1;
-                }
+        for (dof, c) in col.iter_mut().enumerate() {
+            if !mesh.dof_fixed(dof) {
+                *c = k;
+                k += 1;
             }
         }
         DofMap { col, nfree: k }

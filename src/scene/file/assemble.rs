@@ -4,8 +4,9 @@
 //! `J = Σ_bodies (material + gas + pressure) + gravity` (docs/method.md, docs/scene-files.md)
 //! through its energy assembler ([`crate::scene::physics`]), each key checked, with its line,
 //! just before the step that uses it; then the assembled scene is checked: the contact filter,
-//! boundedness under gravity, ε against the rest shapes, the admissibility of the start, and
-//! the initial velocities.
+//! boundedness under gravity and under dead loads, ε against the rest shapes, the
+//! admissibility of the start (displaced by the supports), and the initial velocities. The
+//! supports and dead loads are read in `loads`, the solids' materials in `solid`.
 
 use super::contact::describe;
 use super::schema::{
@@ -13,9 +14,10 @@ use super::schema::{
 };
 use super::{fmt_list, Ctx, Loaded, SceneFile, SceneFileError};
 use crate::contact::min_distance;
+use crate::energy::DeadLoad;
 use crate::energy::TotalEnergy;
 use crate::scene::assemble::{assemble_mesh, file_order, BodyPart};
-use crate::scene::mesh::{Body, ContactFilter, Mesh};
+use crate::scene::mesh::{Body, BodyKind, ContactFilter, Mesh};
 use crate::scene::physics::{EnergyAssembler, Material};
 use crate::scene::Scene;
 use std::path::Path;
@@ -65,10 +67,13 @@ impl Ctx<'_> {
         } = header;
         let nb = loaded.len();
         let (global, welded) = self.resolve_welds(&welds, &loaded)?;
-        let (x_ref, fixed, x0) = place_vertices(dim, &loaded, &global);
+        let (x_ref, fixed, mut x0) = place_vertices(dim, &loaded, &global);
         let parts = body_parts(&loaded, &global);
         let mut mesh = assemble_mesh(dim, x_ref, fixed, &parts, &file_order(nb));
+        let body_elements: Vec<Vec<[usize; 4]>> = parts.into_iter().map(|p| p.elements).collect();
+        let displaced = self.apply_supports(&mut mesh, &mut x0, &loaded, &specs, &global)?;
         let (h, body_all_fixed) = mesh_size(&mesh);
+        let dead_load = self.dead_loads(&mesh, &loaded, &specs, &global, &body_elements)?;
         let energy = self.energy_terms(
             &mesh,
             &x0,
@@ -76,6 +81,7 @@ impl Ctx<'_> {
             &specs,
             &body_all_fixed,
             gravity.as_ref(),
+            dead_load.as_ref(),
         )?;
 
         // contact filter
@@ -91,7 +97,15 @@ impl Ctx<'_> {
         if let Some(g) = &gravity {
             self.check_bounded(&mesh, g, &specs, &allowed, &welded, &names)?;
         }
+        if let Some(load) = &dead_load {
+            self.check_dead_loads_bounded(
+                &mesh, &loaded, &specs, &global, load, &allowed, &welded,
+            )?;
+        }
         self.check_rest_shapes(&mesh, eps, eps_line, &allowed, &names)?;
+        if displaced {
+            self.check_displaced_start(&mesh, &x0, eps, &loaded, &global, &names)?;
+        }
         self.check_start(&mesh, &x0, eps, &energy, &names)?;
         let v0 = self.initial_velocities(&mesh, &loaded, &specs, &names)?;
         Ok(SceneFile {
@@ -110,12 +124,15 @@ impl Ctx<'_> {
             densities: specs.iter().map(|s| s.density).collect(),
             v0,
             gravity: gravity.map(|(g, _)| g),
+            dead_load,
             body_lines: loaded.iter().map(|l| l.line).collect(),
         })
     }
 
-    /// The energy terms, body by body: material, then gas, then pressure; gravity last (the
-    /// order of [`crate::scene::physics::assemble_energy`]), each key checked before its step.
+    /// The energy terms, body by body: material, then gas, then pressure; gravity, then the
+    /// dead loads last (the order of [`crate::scene::physics::assemble_energy`]), each key
+    /// checked before its step.
+    #[allow(clippy::too_many_arguments)]
     fn energy_terms(
         &self,
         mesh: &Mesh,
@@ -124,6 +141,7 @@ impl Ctx<'_> {
         specs: &[BodySpec],
         body_all_fixed: &[bool],
         gravity: Option<&(Vec<f64>, usize)>,
+        dead_load: Option<&DeadLoad>,
     ) -> Result<TotalEnergy, SceneFileError> {
         let mut terms = EnergyAssembler::new(mesh, x0);
         for (bi, (l, s)) in loaded.iter().zip(specs).enumerate() {
@@ -134,7 +152,7 @@ impl Ctx<'_> {
                     return Err(self.invalid(l.line, format!("{}.material", l.key), "(missing)", "a body with a free vertex needs a material (only a body with `fixed.all = true` may have none)"));
                 }
                 Some(m) => {
-                    let material = self.material(l, m)?;
+                    let material = self.material(mesh.dim, l, m)?;
                     terms.material(&[bi], material).map_err(|e| {
                         self.invalid(
                             l.line,
@@ -159,26 +177,44 @@ impl Ctx<'_> {
             }
             self.body_load(&mut terms, bi, l, s, all_fixed, gravity)?;
         }
+        if let Some(load) = dead_load {
+            terms.dead_load(load.clone());
+        }
         Ok(terms.finish(gravity.map(|(g, _)| g.as_slice())))
     }
 
     /// A body's `material`, checked: the model its kind takes (string for curves,
-    /// St Venant–Kirchhoff membrane for 3D surfaces, neo-Hookean for solids) and its
-    /// coefficients.
-    fn material(&self, l: &Loaded, m: &MaterialSpec) -> Result<Material, SceneFileError> {
+    /// St Venant–Kirchhoff membrane for 3D surfaces; solids in [`Ctx::solid_material`]:
+    /// neo-Hookean or linear elastic) and its coefficients.
+    fn material(
+        &self,
+        dim: usize,
+        l: &Loaded,
+        m: &MaterialSpec,
+    ) -> Result<Material, SceneFileError> {
+        if l.kind == BodyKind::Solid {
+            return self.solid_material(dim, l, m);
+        }
         let line = l.line;
         let mk = format!("{}.material", l.key);
+        if let Some((k, v)) = [("E", m.young), ("nu", m.nu)]
+            .into_iter()
+            .find_map(|(k, v)| v.map(|v| (k, v.to_string())))
+            .or(m.plane.as_ref().map(|p| ("plane", format!("{p:?}"))))
+        {
+            return Err(self.invalid(
+                line,
+                format!("{mk}.{k}"),
+                v,
+                "E, nu and plane are keys of solids' materials",
+            ));
+        }
         let expect = Material::model_for(l.kind);
         if m.model != expect {
-            return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean for solids)", l.kind).to_lowercase()));
+            return Err(self.invalid(line, format!("{mk}.model"), format!("{:?}", m.model), format!("a {:?} body takes model = {expect:?} (models: string for curves, stvk-membrane for 3D surfaces, neo-hookean or linear-elastic for solids)", l.kind).to_lowercase()));
         }
-        let mu =
-            m.mu.ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
-        if !(mu > 0.0 && mu.is_finite()) {
-            return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
-        }
-        let lambda = match (expect, m.lambda) {
-            ("string", Some(v)) => {
+        let (mu, lambda) = if expect == "string" {
+            if let Some(v) = m.lambda {
                 return Err(self.invalid(
                     line,
                     format!("{mk}.lambda"),
@@ -186,20 +222,17 @@ impl Ctx<'_> {
                     "the string model has no lambda",
                 ));
             }
-            ("string", None) => 0.0,
-            (_, None) => {
-                return Err(self.invalid(line, format!("{mk}.lambda"), "(missing)", "required"));
+            let mu = m
+                .mu
+                .ok_or_else(|| self.invalid(line, format!("{mk}.mu"), "(missing)", "required"))?;
+            if !(mu > 0.0 && mu.is_finite()) {
+                return Err(self.invalid(line, format!("{mk}.mu"), mu, "must be finite and > 0"));
             }
-            (_, Some(v)) => v,
+            (mu, 0.0)
+        } else {
+            let c = self.elastic_constants(line, &mk, m)?;
+            (c.mu, c.lambda)
         };
-        if !(lambda >= 0.0 && lambda.is_finite()) {
-            return Err(self.invalid(
-                line,
-                format!("{mk}.lambda"),
-                lambda,
-                "must be finite and ≥ 0",
-            ));
-        }
         Ok(Material::of_kind(l.kind, mu, lambda))
     }
 
@@ -276,27 +309,15 @@ impl Ctx<'_> {
             .iter()
             .map(|s| s.density.unwrap_or(0.0) > 0.0)
             .collect();
-        let mut supported: Vec<bool> = mesh
-            .bodies
-            .iter()
-            .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
-            .collect();
-        loop {
-            let mut changed = false;
-            for i in 0..nb {
-                if !supported[i]
-                    && (0..nb).any(|j| {
-                        j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j])
-                    })
-                {
-                    supported[i] = true;
-                    changed = true;
-                }
-            }
-            if !changed {
-                break;
-            }
-        }
+        let supported = supported_closure(
+            nb,
+            mesh.bodies
+                .iter()
+                .map(|b| b.vertices.iter().any(|&v| mesh.fixed[v]))
+                .collect(),
+            allowed,
+            welded,
+        );
         for i in 0..nb {
             if !supported[i] && has_load[i] {
                 return Err(self.invalid(
@@ -433,6 +454,31 @@ impl Ctx<'_> {
             }
         }
         Ok(v0)
+    }
+}
+
+/// The bodies supported directly (`supported`) or through a body they may touch (`allowed`,
+/// the `nb × nb` contact mask) or are welded to (`welded`), transitively.
+pub(super) fn supported_closure(
+    nb: usize,
+    mut supported: Vec<bool>,
+    allowed: &[bool],
+    welded: &[bool],
+) -> Vec<bool> {
+    loop {
+        let mut changed = false;
+        for i in 0..nb {
+            if !supported[i]
+                && (0..nb)
+                    .any(|j| j != i && supported[j] && (allowed[i * nb + j] || welded[i * nb + j]))
+            {
+                supported[i] = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            return supported;
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! positions, transform and fixed vertices, in the body's own numbering, and the checks of
 //! its elements (dangling, unused, degenerate, inverted).
 
-use super::schema::BodySpec;
+use super::schema::{BodySpec, BoxSpec};
 use super::{fmt_list, Ctx, Loaded, SceneFileError, DEGENERATE_TOL, MAX_COORDINATE};
 use crate::scene::mesh::BodyKind;
 use crate::scene::meshio::{read_mesh_file, MeshData};
@@ -314,35 +314,54 @@ impl Ctx<'_> {
                 l.fixed[v as usize] = true;
             }
             if let Some(bx) = &f.bbox {
-                if bx.min.len() != dim
-                    || bx.max.len() != dim
-                    || bx.min.iter().chain(&bx.max).any(|c| c.is_nan())
-                {
-                    return Err(self.invalid(
-                        line,
-                        format!("{key}.fixed.box"),
-                        format!("min = {:?}, max = {:?}", bx.min, bx.max),
-                        format!("min and max must be {dim} numbers each"),
-                    ));
-                }
-                let mut hit = 0;
-                for (v, p) in l.x0.iter().enumerate() {
-                    if (0..dim).all(|c| bx.min[c] <= p[c] && p[c] <= bx.max[c]) {
-                        l.fixed[v] = true;
-                        hit += 1;
-                    }
-                }
-                if hit == 0 {
-                    return Err(self.invalid(
-                        line,
-                        format!("{key}.fixed.box"),
-                        format!("min = {:?}, max = {:?}", bx.min, bx.max),
-                        "holds no vertex of the body's initial configuration",
-                    ));
+                let hits =
+                    self.box_select(line, &format!("{key}.fixed.box"), bx, &l.x0, dim, "initial")?;
+                for v in hits {
+                    l.fixed[v] = true;
                 }
             }
         }
         Ok(l)
+    }
+
+    /// The vertices of `points` (a body's positions in its `config` configuration) in the
+    /// closed box `bx`; an error naming `key` when the box is malformed or holds none.
+    pub(super) fn box_select(
+        &self,
+        line: usize,
+        key: &str,
+        bx: &BoxSpec,
+        points: &[[f64; 3]],
+        dim: usize,
+        config: &str,
+    ) -> Result<Vec<usize>, SceneFileError> {
+        let shown = || format!("min = {:?}, max = {:?}", bx.min, bx.max);
+        if bx.min.len() != dim
+            || bx.max.len() != dim
+            || bx.min.iter().chain(&bx.max).any(|c| c.is_nan())
+        {
+            return Err(self.invalid(
+                line,
+                key,
+                shown(),
+                format!("min and max must be {dim} numbers each"),
+            ));
+        }
+        let hits: Vec<usize> = points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| (0..dim).all(|c| bx.min[c] <= p[c] && p[c] <= bx.max[c]))
+            .map(|(v, _)| v)
+            .collect();
+        if hits.is_empty() {
+            return Err(self.invalid(
+                line,
+                key,
+                shown(),
+                format!("holds no vertex of the body's {config} configuration"),
+            ));
+        }
+        Ok(hits)
     }
 
     /// Unused vertices, degenerate and inverted elements, in the body's own numbering.

@@ -40,6 +40,19 @@
 //! fixed = { vertices = [0, 10], all = false, box = { min = [-1, -1], max = [1, -0.9] } }
 //! gas = { c = 50.0 }          # optional: −C ln V (closed or chord-closed curve, closed surface)
 //! pressure = { p = 1.0 }      # optional (2D curves): p·A
+//!
+//! [[body]]                    # a solid (docs/materials.md)
+//! kind = "solid"
+//! material = { model = "linear-elastic", E = 1.0, nu = 0.3, plane = "strain" }  # or neo-hookean
+//! [[body.support]]            # prescribed components of a vertex set (vertices, all, box)
+//! box = { min = [-0.01, -9.0], max = [0.01, 9.0] }
+//! components = [0]            # default: all; displacement = [..] (default 0)
+//! [[body.traction]]           # dead traction = [..] or pressure = p on the boundary edges/faces
+//! box = { min = [-9.0, 0.99], max = [9.0, 9.0] }
+//! pressure = 0.01
+//! [[body.force]]              # a point force on each selected vertex
+//! vertices = [3]
+//! value = [0.0, -1e-3]
 //! ```
 //!
 //! **Validation.** Every rule returns a [`SceneFileError`] naming the file and the line, key and
@@ -73,12 +86,16 @@
 //! The module is split by concern: `schema` holds the TOML structs (serde), `validate` the
 //! scene-level keys, `body` the loading and checking of each body's mesh, `welds` the shared
 //! vertices, `contact` the `[contact]` filter, `assemble` the mesh, energy terms and the
-//! checks of the assembled scene, `topology` boundaries and chains of element lists.
+//! checks of the assembled scene, `solid` the solids' materials, `loads` the supports and dead
+//! loads (and the checks of a displaced start), `topology` boundaries and chains of element
+//! lists.
 
 mod assemble;
 mod body;
 mod contact;
+mod loads;
 mod schema;
+mod solid;
 pub(crate) mod topology;
 mod validate;
 mod welds;
@@ -165,6 +182,24 @@ pub enum SceneFileError {
         /// ε.
         eps: f64,
     },
+    /// The prescribed displacements of `[[body.support]]` bring two allowed disjoint elements
+    /// of the start closer than ε.
+    #[error(
+        "{path}: the prescribed displacements ([[body.support]]) make the initial configuration \
+         inadmissible: {pair} are at distance {distance:.6e} < eps = {eps:.6e} (the start puts \
+         every supported component at its prescribed value: prescribe a smaller displacement, \
+         or move the bodies apart)"
+    )]
+    DisplacedStart {
+        /// The scene file.
+        path: String,
+        /// The closest pair, with its bodies and local indices.
+        pair: String,
+        /// Its distance.
+        distance: f64,
+        /// ε.
+        eps: f64,
+    },
 }
 
 /// A loaded scene file: the scene and the file's solver settings.
@@ -186,6 +221,9 @@ pub struct SceneFile {
     pub v0: Vec<f64>,
     /// `gravity`, if non-zero.
     pub gravity: Option<Vec<f64>>,
+    /// The dead loads of `[[body.traction]]` and `[[body.force]]` (also a term of the
+    /// scene's energy), if any.
+    pub dead_load: Option<crate::energy::DeadLoad>,
     /// Line of each `[[body]]` table.
     body_lines: Vec<usize>,
 }

@@ -114,6 +114,9 @@ pub(super) struct BodySpec {
     pub(super) fixed: Option<FixedSpec>,
     pub(super) gas: Option<GasSpec>,
     pub(super) pressure: Option<PressureSpec>,
+    pub(super) support: Option<Vec<Spanned<SupportSpec>>>,
+    pub(super) traction: Option<Vec<Spanned<TractionSpec>>>,
+    pub(super) force: Option<Vec<Spanned<ForceSpec>>>,
 }
 
 #[derive(serde::Deserialize)]
@@ -122,6 +125,59 @@ pub(super) struct MaterialSpec {
     pub(super) model: String,
     pub(super) mu: Option<f64>,
     pub(super) lambda: Option<f64>,
+    /// Young's modulus (solids; instead of `mu`, `lambda`).
+    #[serde(rename = "E")]
+    pub(super) young: Option<f64>,
+    /// Poisson's ratio (solids; with `E`).
+    pub(super) nu: Option<f64>,
+    /// `strain` or `stress` (2D solids).
+    pub(super) plane: Option<String>,
+}
+
+/// `[[body.support]]`: prescribed displacements of chosen components of a vertex set (the
+/// vertices listed, all of them, or those in a box of the reference configuration).
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SupportSpec {
+    pub(super) vertices: Option<Vec<i64>>,
+    #[serde(default)]
+    pub(super) all: bool,
+    #[serde(rename = "box")]
+    pub(super) bbox: Option<BoxSpec>,
+    /// The prescribed components (0 = x, 1 = y, 2 = z); default: all.
+    pub(super) components: Option<Vec<i64>>,
+    /// The displacement from the reference (`dim` numbers; only the chosen components are
+    /// used); default 0.
+    pub(super) displacement: Option<Vec<f64>>,
+}
+
+/// `[[body.traction]]`: a dead traction or pressure on the boundary edges (2D) or faces (3D) of
+/// a solid whose vertices are all selected.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TractionSpec {
+    pub(super) vertices: Option<Vec<i64>>,
+    #[serde(default)]
+    pub(super) all: bool,
+    #[serde(rename = "box")]
+    pub(super) bbox: Option<BoxSpec>,
+    /// Force per reference length (2D) or area (3D), `dim` numbers.
+    pub(super) traction: Option<Vec<f64>>,
+    /// Pressure on the reference normal (positive pushes on the body).
+    pub(super) pressure: Option<f64>,
+}
+
+/// `[[body.force]]`: the same point force on every selected vertex.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ForceSpec {
+    pub(super) vertices: Option<Vec<i64>>,
+    #[serde(default)]
+    pub(super) all: bool,
+    #[serde(rename = "box")]
+    pub(super) bbox: Option<BoxSpec>,
+    /// The force on each selected vertex, `dim` numbers.
+    pub(super) value: Vec<f64>,
 }
 
 #[derive(serde::Deserialize)]

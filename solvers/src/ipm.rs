@@ -1,0 +1,779 @@
+//! An interior-point backend on the condensed (normal-equations) system, with a sparse
+//! `LDLᵀ` from `faer`: the `ip` backend.
+//!
+//! # Method
+//!
+//! Each finite side of a row becomes a one-sided constraint `g_j·x ≥ h_j` (`g = a_i`, `h = l_i`
+//! for a lower bound; `g = −a_i`, `h = −u_i` for an upper one); rows with `l_i = u_i` are
+//! equalities `E x = b`; free rows are dropped. With slacks `s = G x − h ≥ 0`, duals `z ≥ 0`
+//! and `y_E`, a Mehrotra predictor–corrector method solves
+//!
+//! ```text
+//!     P x + q − Gᵀz − Eᵀy_E = 0,   G x − h − s = 0,   E x = b,   s ∘ z = σμ e.
+//! ```
+//!
+//! Eliminating `Δs = G Δx + r_p` and `Δz = S⁻¹(r_c − Z Δs)` leaves the quasidefinite system
+//!
+//! ```text
+//!     [ P + Gᵀ D G + ρI   Eᵀ ] [  Δx  ]   [ −r_d + Gᵀ S⁻¹(r_c − Z r_p) ]
+//!     [       E          −δI ] [ −Δy_E ] = [ −r_e                       ],   D = S⁻¹Z,
+//! ```
+//!
+//! factorized once per iteration by `faer`'s supernodal sparse `LDLᵀ` (AMD ordering, symbolic
+//! phase once per QP, dynamic regularization of the pivots by their expected signs), with
+//! `ρ, δ = 1e-10·max(1, max diag)` and two steps of iterative refinement against the
+//! unregularized matrix. Both predictor and corrector use the one factorization. The step is
+//! `0.99×` the longest that keeps `s, z > 0`, the same for the primal and dual variables.
+//!
+//! Unlike the KKT form of a general interior-point code (`n + m` unknowns), this system has
+//! `n + m_E` unknowns: for the contact QPs of the sub-problems, whose rows touch two or three
+//! vertices each and whose only equality rows are the few rank-one rows of a gas, it is the
+//! sparse Hessian plus the contact rows' couplings.
+//!
+//! # Termination and statuses
+//!
+//! `Solved` when the point meets the common tolerances of
+//! [`crate::clarabel_backend::meets_tolerances`] for the original QP (primal and dual
+//! residuals, with the duals mapped back: `y_i = z_upper − z_lower`, `y_i = −y_E` on
+//! equality rows) and the complementarity gap `sᵀz ≤ eps_abs + eps_rel·max(1, |½xᵀPx + qᵀx|)`;
+//! `MaxIterations` after `min(max_iter, 200)` iterations; `TimeLimit`; `NumericalError` when
+//! a factorization fails or the step length collapses (an infeasible QP ends there: this
+//! backend has no infeasibility certificate). Warm starts are checked and ignored.
+
+use crate::backend::{QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart};
+use crate::clarabel_backend::meets_tolerances;
+use crate::qp::Qp;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par, Side, Spec};
+use std::time::Instant;
+
+/// Most interior-point iterations, whatever `max_iter` allows.
+const MAX_IP_ITERATIONS: usize = 200;
+
+/// The interior-point backend (module documentation).
+#[derive(Clone, Debug)]
+pub struct IpBackend {
+    settings: QpSettings,
+}
+
+impl IpBackend {
+    /// A backend with `settings` (validated at each solve).
+    pub fn new(settings: QpSettings) -> Self {
+        IpBackend { settings }
+    }
+}
+
+/// The constraints in one-sided form.
+struct Split {
+    /// Inequality constraints `g_j·x ≥ h_j`: (row of `A`, sign ±1), and `h_j`.
+    ineq: Vec<(usize, f64)>,
+    h: Vec<f64>,
+    /// Equality rows of `A` and their right-hand sides.
+    eq: Vec<usize>,
+    b: Vec<f64>,
+    /// `G` by rows (CSR, the sign folded in).
+    g_ptr: Vec<usize>,
+    g_col: Vec<usize>,
+    g_val: Vec<f64>,
+    /// `E` by rows (CSR).
+    e_ptr: Vec<usize>,
+    e_col: Vec<usize>,
+    e_val: Vec<f64>,
+}
+
+/// `out_j = row_j · x` for a CSR matrix.
+#[inline]
+fn csr_mul(ptr: &[usize], col: &[usize], val: &[f64], x: &[f64], out: &mut [f64]) {
+    for (j, o) in out.iter_mut().enumerate() {
+        let mut acc = 0.0;
+        for p in ptr[j]..ptr[j + 1] {
+            acc += val[p] * x[col[p]];
+        }
+        *o = acc;
+    }
+}
+
+/// `out += Mᵀ w` for a CSR matrix.
+#[inline]
+fn csr_tr_mul_add(ptr: &[usize], col: &[usize], val: &[f64], w: &[f64], out: &mut [f64]) {
+    for (j, &wj) in w.iter().enumerate() {
+        if wj != 0.0 {
+            for p in ptr[j]..ptr[j + 1] {
+                out[col[p]] += val[p] * wj;
+            }
+        }
+    }
+}
+
+impl Split {
+    fn new(qp: &Qp) -> Split {
+        let (n, m) = (qp.n(), qp.m());
+        let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+        for j in 0..n {
+            for p in qp.a.colptr[j]..qp.a.colptr[j + 1] {
+                rows[qp.a.rowval[p]].push((j, qp.a.nzval[p]));
+            }
+        }
+        let (mut ineq, mut h, mut eq, mut b) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for i in 0..m {
+            if qp.l[i] == qp.u[i] {
+                eq.push(i);
+                b.push(qp.l[i]);
+                continue;
+            }
+            if qp.l[i].is_finite() {
+                ineq.push((i, 1.0));
+                h.push(qp.l[i]);
+            }
+            if qp.u[i].is_finite() {
+                ineq.push((i, -1.0));
+                h.push(-qp.u[i]);
+            }
+        }
+        let (mut g_ptr, mut g_col, mut g_val) = (vec![0], Vec::new(), Vec::new());
+        for &(i, sg) in &ineq {
+            for &(c, v) in &rows[i] {
+                g_col.push(c);
+                g_val.push(sg * v);
+            }
+            g_ptr.push(g_col.len());
+        }
+        let (mut e_ptr, mut e_col, mut e_val) = (vec![0], Vec::new(), Vec::new());
+        for &i in &eq {
+            for &(c, v) in &rows[i] {
+                e_col.push(c);
+                e_val.push(v);
+            }
+            e_ptr.push(e_col.len());
+        }
+        Split {
+            ineq,
+            h,
+            eq,
+            b,
+            g_ptr,
+            g_col,
+            g_val,
+            e_ptr,
+            e_col,
+            e_val,
+        }
+    }
+
+    /// The entries of inequality constraint `j`: (columns, values with the sign).
+    fn g_row(&self, j: usize) -> (&[usize], &[f64]) {
+        let r = self.g_ptr[j]..self.g_ptr[j + 1];
+        (&self.g_col[r.clone()], &self.g_val[r])
+    }
+
+    /// `G x` into `out`.
+    fn g_mul(&self, x: &[f64], out: &mut [f64]) {
+        csr_mul(&self.g_ptr, &self.g_col, &self.g_val, x, out);
+    }
+
+    /// `out += Gᵀ w`.
+    fn gt_mul_add(&self, w: &[f64], out: &mut [f64]) {
+        csr_tr_mul_add(&self.g_ptr, &self.g_col, &self.g_val, w, out);
+    }
+
+    /// `E x` into `out`.
+    fn e_mul(&self, x: &[f64], out: &mut [f64]) {
+        csr_mul(&self.e_ptr, &self.e_col, &self.e_val, x, out);
+    }
+
+    /// `out += Eᵀ w`.
+    fn et_mul_add(&self, w: &[f64], out: &mut [f64]) {
+        csr_tr_mul_add(&self.e_ptr, &self.e_col, &self.e_val, w, out);
+    }
+}
+
+/// The condensed matrix `K` (upper triangle, CSC, `n + m_E` columns): its pattern, where each
+/// contribution goes, its factorization.
+struct Kkt {
+    n: usize,
+    dim: usize,
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    /// The value positions of `P`'s entries, in `P`'s order.
+    p_pos: Vec<usize>,
+    /// The value positions of the diagonal entries.
+    diag_pos: Vec<usize>,
+    /// Per inequality constraint `j`, `g_pos[g_ptr[j]..g_ptr[j+1]]`: (value position,
+    /// g_a·g_b) over its entry pairs `a ≤ b`.
+    g_ptr: Vec<usize>,
+    g_pos: Vec<(usize, f64)>,
+    /// The value positions of `E`'s entries and their values.
+    e_pos: Vec<(usize, f64)>,
+    symbolic: SymbolicCholesky<usize>,
+    sym_mat: SymbolicSparseColMat<usize>,
+    signs: Vec<i8>,
+    lvals: Vec<f64>,
+    buf: MemBuffer,
+}
+
+impl Kkt {
+    fn new(qp: &Qp, split: &Split) -> Option<Kkt> {
+        let n = qp.n();
+        let me = split.eq.len();
+        let dim = n + me;
+        // the pattern as sorted column sets (upper: row ≤ column)
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); dim];
+        for (j, col) in cols.iter_mut().enumerate() {
+            col.push(j);
+        }
+        for j in 0..n {
+            for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
+                cols[j].push(qp.p.rowval[p]);
+            }
+        }
+        for j in 0..split.ineq.len() {
+            let (cs, _) = split.g_row(j);
+            for &a in cs {
+                for &b in cs {
+                    if a <= b {
+                        cols[b].push(a);
+                    }
+                }
+            }
+        }
+        for k in 0..split.eq.len() {
+            for &c in &split.e_col[split.e_ptr[k]..split.e_ptr[k + 1]] {
+                cols[n + k].push(c);
+            }
+        }
+        let mut colptr = Vec::with_capacity(dim + 1);
+        let mut rowval = Vec::new();
+        colptr.push(0);
+        for c in cols.iter_mut() {
+            c.sort_unstable();
+            c.dedup();
+            rowval.extend_from_slice(c);
+            colptr.push(rowval.len());
+        }
+        let pos = |r: usize, c: usize| -> usize {
+            let s = &rowval[colptr[c]..colptr[c + 1]];
+            colptr[c] + s.binary_search(&r).expect("entry in the pattern")
+        };
+        let mut p_pos = Vec::with_capacity(qp.p.nnz());
+        for j in 0..n {
+            for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
+                p_pos.push(pos(qp.p.rowval[p], j));
+            }
+        }
+        let diag_pos = (0..dim).map(|j| pos(j, j)).collect();
+        let mut g_ptr = vec![0];
+        let mut g_pos = Vec::new();
+        for j in 0..split.ineq.len() {
+            let (cs, vs) = split.g_row(j);
+            for (&a, &va) in cs.iter().zip(vs) {
+                for (&b, &vb) in cs.iter().zip(vs) {
+                    if a <= b {
+                        // (g gᵀ)_ab, stored once in the upper triangle
+                        g_pos.push((pos(a, b), va * vb));
+                    }
+                }
+            }
+            g_ptr.push(g_pos.len());
+        }
+        let e_pos = (0..split.eq.len())
+            .flat_map(|k| {
+                let r = split.e_ptr[k]..split.e_ptr[k + 1];
+                split.e_col[r.clone()]
+                    .iter()
+                    .zip(&split.e_val[r])
+                    .map(move |(&c, &v)| (c, k, v))
+            })
+            .map(|(c, k, v)| (pos(c, n + k), v))
+            .collect();
+        let sym_mat =
+            SymbolicSparseColMat::new_checked(dim, dim, colptr.clone(), None, rowval.clone());
+        let symbolic = factorize_symbolic_cholesky(
+            sym_mat.as_ref(),
+            Side::Upper,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .ok()?;
+        let mut signs = vec![1i8; dim];
+        for s in signs.iter_mut().skip(n) {
+            *s = -1;
+        }
+        let req = symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Spec::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let lvals = vec![0.0; symbolic.len_val()];
+        Some(Kkt {
+            n,
+            dim,
+            colptr,
+            rowval,
+            p_pos,
+            diag_pos,
+            g_ptr,
+            g_pos,
+            e_pos,
+            symbolic,
+            sym_mat,
+            signs,
+            lvals,
+            buf: MemBuffer::try_new(req).ok()?,
+        })
+    }
+
+    /// The values of `K` for the weights `d` (`D`), with `reg` added to the `x` block's
+    /// diagonal and `−reg_e` to the equality block's.
+    fn values(&self, qp: &Qp, d: &[f64], reg: f64, reg_e: f64) -> Vec<f64> {
+        let mut v = vec![0.0; self.rowval.len()];
+        for (&p, &val) in self.p_pos.iter().zip(&qp.p.nzval) {
+            v[p] += val;
+        }
+        for (j, &dj) in d.iter().enumerate() {
+            for &(p, gg) in &self.g_pos[self.g_ptr[j]..self.g_ptr[j + 1]] {
+                v[p] += dj * gg;
+            }
+        }
+        for &(p, e) in &self.e_pos {
+            v[p] += e;
+        }
+        for (j, &p) in self.diag_pos.iter().enumerate() {
+            v[p] += if j < self.n { reg } else { -reg_e };
+        }
+        v
+    }
+
+    /// `K v` (upper-triangle storage, symmetric product).
+    fn mul(&self, vals: &[f64], x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.dim];
+        for j in 0..self.dim {
+            for p in self.colptr[j]..self.colptr[j + 1] {
+                let i = self.rowval[p];
+                y[i] += vals[p] * x[j];
+                if i != j {
+                    y[j] += vals[p] * x[i];
+                }
+            }
+        }
+        y
+    }
+
+    /// Factorizes `vals`; false when the factorization fails.
+    fn factor(&mut self, vals: &[f64], delta: f64) -> bool {
+        let mat = SparseColMatRef::new(self.sym_mat.as_ref(), vals);
+        let reg = LdltRegularization {
+            dynamic_regularization_signs: Some(&self.signs),
+            dynamic_regularization_delta: delta,
+            dynamic_regularization_epsilon: delta * 1e-3,
+        };
+        self.symbolic
+            .factorize_numeric_ldlt(
+                &mut self.lvals,
+                mat,
+                Side::Upper,
+                reg,
+                Par::Seq,
+                MemStack::new(&mut self.buf),
+                Spec::default(),
+            )
+            .is_ok()
+    }
+
+    /// Solves with the factorization in place.
+    fn solve(&mut self, rhs: &mut [f64]) {
+        let ldlt = faer::sparse::linalg::cholesky::LdltRef::new(&self.symbolic, &self.lvals);
+        let n = rhs.len();
+        let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        ldlt.solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut self.buf));
+    }
+
+    /// Solves `K_true Δ = rhs` with the factorization of the regularized `K` and two steps of
+    /// iterative refinement against `K_true` (`vals_true`).
+    fn solve_refined(&mut self, vals_true: &[f64], rhs: &[f64]) -> Vec<f64> {
+        let mut x = rhs.to_vec();
+        self.solve(&mut x);
+        for _ in 0..2 {
+            let kx = self.mul(vals_true, &x);
+            let mut r: Vec<f64> = rhs.iter().zip(&kx).map(|(a, b)| a - b).collect();
+            self.solve(&mut r);
+            for (xi, ri) in x.iter_mut().zip(&r) {
+                *xi += ri;
+            }
+        }
+        x
+    }
+}
+
+/// The longest `α ∈ (0, 1]` keeping `v + α·dv > 0` (and `1` when nothing limits it).
+fn max_step(v: &[f64], dv: &[f64]) -> f64 {
+    v.iter()
+        .zip(dv)
+        .filter(|(_, d)| **d < 0.0)
+        .map(|(a, d)| -a / d)
+        .fold(1.0, f64::min)
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+impl QpBackend for IpBackend {
+    fn name(&self) -> &'static str {
+        "ip"
+    }
+
+    fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
+        let start = Instant::now();
+        self.settings.validate()?;
+        qp.validate()?;
+        let (n, m) = (qp.n(), qp.m());
+        crate::osqp_backend::check_warm(warm, n, m)?;
+        let s = &self.settings;
+        let split = Split::new(qp);
+        let (mi, me) = (split.ineq.len(), split.eq.len());
+        let mut out = QpSolution {
+            x: vec![0.0; n],
+            y: vec![0.0; m],
+            status: QpStatus::NumericalError,
+            iterations: 0,
+            solve_time_s: 0.0,
+        };
+        let Some(mut kkt) = Kkt::new(qp, &split) else {
+            out.solve_time_s = start.elapsed().as_secs_f64();
+            return Ok(out);
+        };
+        // the duals of the original rows: y_i = z_upper − z_lower, −y_E on equality rows
+        let map_y = |z: &[f64], ye: &[f64]| {
+            let mut y = vec![0.0; m];
+            for (&(i, sg), &zj) in split.ineq.iter().zip(z) {
+                y[i] -= sg * zj;
+            }
+            for (&i, &v) in split.eq.iter().zip(ye) {
+                y[i] = -v;
+            }
+            y
+        };
+        let maxdiag = (0..n)
+            .filter_map(|j| {
+                (qp.p.colptr[j]..qp.p.colptr[j + 1])
+                    .find(|&p| qp.p.rowval[p] == j)
+                    .map(|p| qp.p.nzval[p].abs())
+            })
+            .fold(1.0f64, f64::max);
+        let reg = 1e-10 * maxdiag;
+        let dim = n + me;
+
+        // Initial point: min ½xᵀPx + qᵀx + ½|Gx − h|² s.t. Ex = b, then slacks and duals
+        // shifted positive (Mehrotra's heuristic).
+        let ones = vec![1.0; mi];
+        let vals_true = kkt.values(qp, &ones, 0.0, 0.0);
+        let vals = kkt.values(qp, &ones, reg, reg);
+        if !kkt.factor(&vals, reg) {
+            out.solve_time_s = start.elapsed().as_secs_f64();
+            return Ok(out);
+        }
+        let mut rhs = vec![0.0; dim];
+        for (r, qv) in rhs.iter_mut().zip(&qp.q) {
+            *r = -qv;
+        }
+        split.gt_mul_add(&split.h, &mut rhs[..n]);
+        for (k, bv) in split.b.iter().enumerate() {
+            rhs[n + k] = *bv;
+        }
+        let sol = kkt.solve_refined(&vals_true, &rhs);
+        let mut x = sol[..n].to_vec();
+        let mut ye: Vec<f64> = sol[n..].iter().map(|v| -v).collect();
+        let mut gx = vec![0.0; mi];
+        split.g_mul(&x, &mut gx);
+        let r: Vec<f64> = gx.iter().zip(&split.h).map(|(a, b)| a - b).collect();
+        let mut sl = r.clone();
+        let mut z: Vec<f64> = r.iter().map(|v| -v).collect();
+        if mi > 0 {
+            let ds = (-1.5 * sl.iter().copied().fold(f64::INFINITY, f64::min)).max(0.0);
+            let dz = (-1.5 * z.iter().copied().fold(f64::INFINITY, f64::min)).max(0.0);
+            sl.iter_mut().for_each(|v| *v += ds);
+            z.iter_mut().for_each(|v| *v += dz);
+            let sz: f64 = sl.iter().zip(&z).map(|(a, b)| a * b).sum();
+            let (ssum, zsum) = (sl.iter().sum::<f64>(), z.iter().sum::<f64>());
+            let ds2 = if zsum > 0.0 { 0.5 * sz / zsum } else { 1.0 };
+            let dz2 = if ssum > 0.0 { 0.5 * sz / ssum } else { 1.0 };
+            let floor = 1e-8 * (1.0 + inf_norm(&r));
+            sl.iter_mut().for_each(|v| *v = (*v + ds2).max(floor));
+            z.iter_mut().for_each(|v| *v = (*v + dz2).max(floor));
+        }
+
+        let max_it = s.max_iter.min(MAX_IP_ITERATIONS);
+        let mut px = vec![0.0; n];
+        let mut ex = vec![0.0; me];
+        for it in 0..=max_it {
+            // residuals
+            px.iter_mut().for_each(|v| *v = 0.0);
+            qp.p.sym_upper_mul_add(1.0, &x, &mut px);
+            let mut rd: Vec<f64> = px.iter().zip(&qp.q).map(|(a, b)| a + b).collect();
+            let mz: Vec<f64> = z.iter().map(|v| -v).collect();
+            split.gt_mul_add(&mz, &mut rd);
+            let mye: Vec<f64> = ye.iter().map(|v| -v).collect();
+            split.et_mul_add(&mye, &mut rd);
+            split.g_mul(&x, &mut gx);
+            let rp: Vec<f64> = (0..mi).map(|j| gx[j] - split.h[j] - sl[j]).collect();
+            split.e_mul(&x, &mut ex);
+            let re: Vec<f64> = ex.iter().zip(&split.b).map(|(a, b)| a - b).collect();
+            let gap: f64 = sl.iter().zip(&z).map(|(a, b)| a * b).sum();
+            let obj = 0.5 * x.iter().zip(&px).map(|(a, b)| a * b).sum::<f64>()
+                + x.iter().zip(&qp.q).map(|(a, b)| a * b).sum::<f64>();
+            out.iterations = it;
+            let y = map_y(&z, &ye);
+            if gap <= s.eps_abs + s.eps_rel * obj.abs().max(1.0) && meets_tolerances(qp, &x, &y, s)
+            {
+                out.x = x;
+                out.y = y;
+                out.status = QpStatus::Solved;
+                out.solve_time_s = start.elapsed().as_secs_f64();
+                return Ok(out);
+            }
+            out.x = x.clone();
+            out.y = y;
+            if it == max_it {
+                out.status = QpStatus::MaxIterations;
+                break;
+            }
+            if start.elapsed().as_secs_f64() > s.time_limit_s {
+                out.status = QpStatus::TimeLimit;
+                break;
+            }
+            let mu = if mi > 0 { gap / mi as f64 } else { 0.0 };
+            // the matrix of this iteration
+            let d: Vec<f64> = sl.iter().zip(&z).map(|(a, b)| b / a).collect();
+            let vals = kkt.values(qp, &d, reg, reg);
+            if !kkt.factor(&vals, reg) {
+                out.status = QpStatus::NumericalError;
+                break;
+            }
+            // Δ for a complementarity right-hand side rc: the condensed system, then two
+            // steps of iterative refinement on the full Newton system (equations (a), (c);
+            // (b) and (d) hold by construction), which also absorbs the regularization.
+            let mut direction = |rc: &[f64]| -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+                // w = S⁻¹(rc − Z rp)
+                let w: Vec<f64> = (0..mi).map(|j| (rc[j] - z[j] * rp[j]) / sl[j]).collect();
+                let mut rhs = vec![0.0; dim];
+                for (r, v) in rhs.iter_mut().zip(&rd) {
+                    *r = -v;
+                }
+                split.gt_mul_add(&w, &mut rhs[..n]);
+                for (k, v) in re.iter().enumerate() {
+                    rhs[n + k] = -v;
+                }
+                kkt.solve(&mut rhs);
+                let mut dx = rhs[..n].to_vec();
+                let mut dye: Vec<f64> = rhs[n..].iter().map(|v| -v).collect();
+                let mut gdx = vec![0.0; mi];
+                split.g_mul(&dx, &mut gdx);
+                let mut ds: Vec<f64> = (0..mi).map(|j| gdx[j] + rp[j]).collect();
+                let mut dz: Vec<f64> = (0..mi).map(|j| (rc[j] - z[j] * ds[j]) / sl[j]).collect();
+                for _ in 0..2 {
+                    // ρ_a = −r_d − (P Δx − Gᵀ Δz − Eᵀ Δy), ρ_c = −r_e − E Δx
+                    let mut ra: Vec<f64> = rd.iter().map(|v| -v).collect();
+                    let mut pdx = vec![0.0; n];
+                    qp.p.sym_upper_mul_add(1.0, &dx, &mut pdx);
+                    for (r, v) in ra.iter_mut().zip(&pdx) {
+                        *r -= v;
+                    }
+                    split.gt_mul_add(&dz, &mut ra);
+                    split.et_mul_add(&dye, &mut ra);
+                    let mut edx = vec![0.0; me];
+                    split.e_mul(&dx, &mut edx);
+                    let mut corr = ra;
+                    corr.extend(re.iter().zip(&edx).map(|(a, b)| -a - b));
+                    kkt.solve(&mut corr);
+                    split.g_mul(&corr[..n], &mut gdx);
+                    for (v, c) in dx.iter_mut().zip(&corr[..n]) {
+                        *v += c;
+                    }
+                    for (v, c) in dye.iter_mut().zip(&corr[n..]) {
+                        *v -= c;
+                    }
+                    for j in 0..mi {
+                        ds[j] += gdx[j];
+                        dz[j] -= z[j] * gdx[j] / sl[j];
+                    }
+                }
+                (dx, dye, ds, dz)
+            };
+            // predictor
+            let rc_aff: Vec<f64> = (0..mi).map(|j| -sl[j] * z[j]).collect();
+            let (_, _, ds_a, dz_a) = direction(&rc_aff);
+            let a_aff = max_step(&sl, &ds_a).min(max_step(&z, &dz_a));
+            let mu_aff = if mi > 0 {
+                (0..mi)
+                    .map(|j| (sl[j] + a_aff * ds_a[j]) * (z[j] + a_aff * dz_a[j]))
+                    .sum::<f64>()
+                    / mi as f64
+            } else {
+                0.0
+            };
+            let sigma = if mu > 0.0 {
+                (mu_aff / mu).powi(3).min(1.0)
+            } else {
+                0.0
+            };
+            // corrector
+            let rc: Vec<f64> = (0..mi)
+                .map(|j| -sl[j] * z[j] - ds_a[j] * dz_a[j] + sigma * mu)
+                .collect();
+            let (dx, dye, ds, dz) = direction(&rc);
+            let alpha = (0.99 * max_step(&sl, &ds).min(max_step(&z, &dz))).min(1.0);
+            if !(alpha > 1e-12) || dx.iter().any(|v| !v.is_finite()) {
+                out.status = QpStatus::NumericalError;
+                break;
+            }
+            for (v, d) in x.iter_mut().zip(&dx) {
+                *v += alpha * d;
+            }
+            for (v, d) in ye.iter_mut().zip(&dye) {
+                *v += alpha * d;
+            }
+            for j in 0..mi {
+                sl[j] = (sl[j] + alpha * ds[j]).max(f64::MIN_POSITIVE);
+                z[j] = (z[j] + alpha * dz[j]).max(f64::MIN_POSITIVE);
+            }
+        }
+        out.solve_time_s = start.elapsed().as_secs_f64();
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clarabel_backend::ClarabelBackend;
+    use crate::qp::tests::small_qp;
+    use crate::qp::CscMatrix;
+
+    #[test]
+    fn solves_small_qp_with_crate_dual_signs() {
+        let qp = small_qp();
+        let s = IpBackend::new(QpSettings::default())
+            .solve(&qp, None)
+            .unwrap();
+        assert_eq!(s.status, QpStatus::Solved);
+        // The optimum is (0.8, 0.2), the upper row 0 and the lower bound of row 1 active.
+        assert!(
+            (s.x[0] - 0.8).abs() < 1e-7 && (s.x[1] - 0.2).abs() < 1e-7,
+            "{:?}",
+            s.x
+        );
+        assert!(qp.dual_residual(&s.x, &s.y) < 1e-7);
+        assert!(s.y[0] > 0.0, "upper bound active → y ≥ 0: {:?}", s.y);
+        assert!(s.y[1] < 0.0, "lower bound active → y ≤ 0: {:?}", s.y);
+        assert_eq!(s.y[2], 0.0);
+    }
+
+    #[test]
+    fn equality_rows_and_an_infeasible_qp() {
+        let mut qp = small_qp();
+        qp.l[2] = 0.1;
+        qp.u[2] = 0.1;
+        let mut b = IpBackend::new(QpSettings::default());
+        let s = b.solve(&qp, None).unwrap();
+        assert_eq!(s.status, QpStatus::Solved);
+        assert!(
+            (s.x[0] - 0.9).abs() < 1e-7 && (s.x[1] - 0.1).abs() < 1e-7,
+            "{:?}",
+            s.x
+        );
+        assert!(qp.dual_residual(&s.x, &s.y) < 1e-7);
+        // x0 ≥ 0.95 and x0 + x1 ≤ 1 with x1 = 0.1: infeasible, never `Solved`.
+        qp.l[1] = 0.95;
+        let s = b.solve(&qp, None).unwrap();
+        assert_ne!(s.status, QpStatus::Solved);
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let mut qp = small_qp();
+        qp.l[1] = 6.0;
+        let e = IpBackend::new(QpSettings::default())
+            .solve(&qp, None)
+            .unwrap_err();
+        assert_eq!(
+            e,
+            QpError::InvalidBounds {
+                row: 1,
+                l: 6.0,
+                u: 5.0
+            }
+        );
+    }
+
+    /// A chain of points in 2D pressed down onto a line by a linear load, springs between
+    /// neighbours (a tridiagonal `P` per component), two-point contact rows `x_{2i+1} ≥ −1`,
+    /// duplicated rows and rows coupling neighbours: the structure of the contact QPs. Clarabel
+    /// and `ip` must agree on the objective and the solution.
+    fn chain_qp(n: usize) -> Qp {
+        let dim = 2 * n;
+        let mut pt = Vec::new();
+        for c in 0..2 {
+            for i in 0..n {
+                let k = 2 * i + c;
+                pt.push((k, k, 2.0 + 0.01 * i as f64));
+                if i + 1 < n {
+                    pt.push((k, k + 2, -1.0));
+                }
+            }
+        }
+        let p = CscMatrix::from_triplets(dim, dim, &pt).unwrap();
+        let q: Vec<f64> = (0..dim)
+            .map(|k| if k % 2 == 1 { 0.3 } else { -0.05 })
+            .collect();
+        let mut at = Vec::new();
+        let (mut l, mut u) = (Vec::new(), Vec::new());
+        let mut row = 0;
+        for i in 0..n {
+            // y_i ≥ −1 − 0.01 i, twice (a duplicate), and a row coupling x_i and y_i.
+            for _ in 0..2 {
+                at.push((row, 2 * i + 1, 1.0));
+                l.push(-1.0 - 0.01 * i as f64);
+                u.push(f64::INFINITY);
+                row += 1;
+            }
+            at.push((row, 2 * i, 0.2));
+            at.push((row, 2 * i + 1, 1.0));
+            l.push(-1.5);
+            u.push(2.0);
+            row += 1;
+        }
+        let a = CscMatrix::from_triplets(row, dim, &at).unwrap();
+        Qp { p, q, a, l, u }
+    }
+
+    #[test]
+    fn agrees_with_clarabel_on_a_contact_like_qp() {
+        let qp = chain_qp(60);
+        let settings = QpSettings {
+            eps_abs: 1e-10,
+            eps_rel: 1e-10,
+            ..QpSettings::default()
+        };
+        let ip = IpBackend::new(settings.clone()).solve(&qp, None).unwrap();
+        let cl = ClarabelBackend::new(settings).solve(&qp, None).unwrap();
+        assert_eq!(ip.status, QpStatus::Solved);
+        assert_eq!(cl.status, QpStatus::Solved);
+        let (ji, jc) = (qp.objective(&ip.x), qp.objective(&cl.x));
+        assert!(
+            (ji - jc).abs() <= 1e-8 * jc.abs().max(1.0),
+            "objective ip {ji} clarabel {jc}"
+        );
+        let dx =
+            ip.x.iter()
+                .zip(&cl.x)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(dx < 1e-6, "max |x_ip − x_clarabel| = {dx}");
+        assert!(qp.primal_residual(&ip.x) < 1e-9);
+        assert!(qp.dual_residual(&ip.x, &ip.y) < 1e-8);
+        // Some contact rows bind (the load pushes the chain down).
+        assert!(ip.y.iter().any(|&y| y < -1e-6), "no lower row active");
+    }
+}
