@@ -625,7 +625,7 @@ impl QpBackend for IpBackend {
                 .collect();
             let (dx, dye, ds, dz) = direction(&rc);
             let alpha = (0.99 * max_step(&sl, &ds).min(max_step(&z, &dz))).min(1.0);
-            if !(alpha > 1e-12) || dx.iter().any(|v| !v.is_finite()) {
+            if alpha.is_nan() || alpha <= 1e-12 || dx.iter().any(|v| !v.is_finite()) {
                 out.status = QpStatus::NumericalError;
                 break;
             }

@@ -125,6 +125,10 @@ pub const BACKENDS: [Backend; 5] = [
     },
 ];
 
+/// The backend of runs, sweeps and scene files that name none, and of the diagnostics'
+/// reference solves (the core takes it from here and never names a backend itself).
+pub const DEFAULT_BACKEND: &str = BACKENDS[0].name;
+
 /// The names of [`BACKENDS`], in order.
 pub const BACKEND_NAMES: [&str; BACKENDS.len()] = {
     let mut names = [""; BACKENDS.len()];

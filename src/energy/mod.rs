@@ -387,7 +387,7 @@ pub trait Objective {
     fn model_is_psd(&self, model: HessianModel) -> bool;
     /// The gradient of each term of `J` (they sum to [`Objective::gradient`]): the forces
     /// that balance at a stationary point, the scale of the minimality certificate
-    /// (`crate::solve::certificate`). The default is `J` as one term.
+    /// (docs/method.md, "The minimality certificate"). The default is `J` as one term.
     fn term_gradients(&self, x: &[f64]) -> Vec<Vec<f64>> {
         vec![self.gradient(x)]
     }

@@ -17,7 +17,7 @@ use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResul
 use crate::solve::settings::{tol_kappa, Accuracy};
 use crate::solve::sqp::OuterMethod;
 use anyhow::Result;
-use contactlab_solvers::{backend_from_name, QpBackend, QpSettings};
+use contactlab_solvers::{backend_from_name, QpBackend, QpSettings, DEFAULT_BACKEND};
 use std::time::Instant;
 
 /// What a case runs with.
@@ -89,7 +89,7 @@ pub fn lemma_diagnostics_with(
             eps_rel: tol,
             ..Default::default()
         };
-        let mut b = backend_from_name("clarabel", &st)?;
+        let mut b = backend_from_name(DEFAULT_BACKEND, &st)?;
         let d = converged_diagnostics(
             &scene.mesh,
             &scene.energy,

@@ -33,7 +33,7 @@ pub struct ExportArgs {
     #[arg(long = "param")]
     pub params: Vec<String>,
     /// Backend that solves the QPs during the run.
-    #[arg(long, default_value = "clarabel")]
+    #[arg(long, default_value = contactlab_solvers::DEFAULT_BACKEND)]
     pub backend: String,
     /// Accuracy preset: low, default or high.
     #[arg(long, default_value = "default")]

@@ -43,7 +43,7 @@ pub struct RunArgs {
     #[arg(default_value = "balloons")]
     pub scene: String,
     /// Sub-problem backend (the backend registry, `contactlab_solvers::registry`).
-    #[arg(long, default_value = "clarabel", help = backend_help())]
+    #[arg(long, default_value = contactlab_solvers::DEFAULT_BACKEND, help = backend_help())]
     pub backend: String,
     /// Mesh level: elements per membrane (balloons), edges of the ring (both default 40), or
     /// the 3D scene's level (default: the scene's own, docs/scenes.md).

@@ -48,7 +48,7 @@ pub struct ScalingArgs {
     #[arg(long, default_value_t = 400)]
     full_max_n: usize,
     /// Backend.
-    #[arg(long, default_value = "clarabel")]
+    #[arg(long, default_value = contactlab_solvers::DEFAULT_BACKEND)]
     backend: String,
     /// Wall-clock limit per case, seconds (the case is killed and recorded as `timeout`).
     #[arg(long, default_value_t = 1800.0)]

@@ -25,7 +25,7 @@ use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
 use crate::solve::sqp::OuterMethod;
 use anyhow::{bail, Context, Result};
-use contactlab_solvers::BACKEND_NAMES;
+use contactlab_solvers::{BACKEND_NAMES, DEFAULT_BACKEND};
 use rayon::prelude::*;
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -161,7 +161,7 @@ pub struct ReferenceSpec {
 }
 
 fn default_ref_backend() -> String {
-    "clarabel".into()
+    DEFAULT_BACKEND.into()
 }
 fn default_ref_accuracy() -> String {
     "high".into()
@@ -405,7 +405,7 @@ impl BlockSettings {
                 .unwrap_or_else(|| vec![dflt.to_string()])
         };
         let c = &b.common;
-        let backends = pick(&c.backends, &defaults.backends, "clarabel");
+        let backends = pick(&c.backends, &defaults.backends, DEFAULT_BACKEND);
         let accs = pick(&c.accuracy, &defaults.accuracy, "default");
         let pruning_name = c
             .pruning
@@ -443,7 +443,7 @@ impl BlockSettings {
         for be in backends
             .iter()
             .map(String::as_str)
-            .chain(backends.is_empty().then_some("clarabel"))
+            .chain(backends.is_empty().then_some(DEFAULT_BACKEND))
         {
             let rs = RunSettings {
                 backend: be.to_string(),

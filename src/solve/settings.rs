@@ -134,7 +134,7 @@ impl Default for RunSettings {
     fn default() -> Self {
         let outer = OuterSettings::default();
         RunSettings {
-            backend: "clarabel".into(),
+            backend: contactlab_solvers::DEFAULT_BACKEND.into(),
             accuracy: Accuracy::Default,
             pruning: outer.pruning,
             tol_j: None,
