@@ -41,6 +41,7 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         max_outer: 2000,
         max_inner: None,
         newton_model: Default::default(),
+        outer_method: Default::default(),
         time_limit_s: None,
     };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();

@@ -119,6 +119,10 @@ const CORPUS: &[(&str, &[&str])] = &[
             "shifted, projected",
         ],
     ),
+    (
+        "solver_bad_outer_method.toml",
+        &[":4:", "solver.outer_method", "\"newton\"", "pantz, sqp"],
+    ),
     ("unknown_body_key.toml", &[":19:", "unknown field `colour`"]),
     ("unknown_contact_body.toml", &["contact.pairs", "\"uper\""]),
     ("unknown_key.toml", &[":3:", "unknown field `epsilon`"]),
@@ -451,7 +455,7 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     let solver = "[solver]\nbackend = \"uzawa\"\npruning = \"lazy\"\naccuracy = \"low\"\n\
                   max_outer = 4\nmax_inner = 3\ntol_j = 1e-7\nqp_tol = 1e-7\n\
                   lazy_start = 0.5\ntrust_delta0 = 0.5\nwarm_start = false\n\
-                  newton_model = \"projected\"\n";
+                  newton_model = \"projected\"\nouter_method = \"sqp\"\n";
     let a = src.find("[solver]").unwrap();
     let b = a + src[a..].find("\n\n").unwrap();
     std::fs::write(
@@ -490,6 +494,8 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(set["inner"]["max_inner"], 3);
     assert_eq!(set["inner"]["warm_start"], false);
     assert_eq!(set["inner"]["hessian_model"], "projected");
+    assert_eq!(s["outer_method"], "sqp");
+    assert_eq!(set["method"], "sqp");
     // flags given on the command line win, the rest still come from the file
     let s = summary(&[
         "--backend",
@@ -509,6 +515,9 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(s["settings"]["inner"]["max_inner"], 3);
     assert_eq!(s["qp_tol"], 1e-7);
     assert_eq!(s["settings"]["inner"]["hessian_model"], "projected");
-    let s = summary(&["--newton-model", "shifted"]);
+    assert_eq!(s["outer_method"], "sqp");
+    let s = summary(&["--newton-model", "shifted", "--outer-method", "pantz"]);
     assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted");
+    assert_eq!(s["outer_method"], "pantz");
+    assert_eq!(s["sqp_steps"], 0);
 }

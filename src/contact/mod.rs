@@ -27,6 +27,7 @@
 pub mod admissibility;
 pub mod broad_phase;
 pub mod bvh;
+pub mod continuous;
 pub mod distance;
 pub mod edge_edge;
 pub mod motion;

@@ -122,11 +122,55 @@ impl<const D: usize> MotionSearch<D> {
     /// (the order of [`ContactPair`]). Exactly the pairs of the all-pairs mode that `phi`
     /// violates (module documentation).
     pub fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
+        self.traverse(mesh, psi, phi, eps_qp, &|pair, out: &mut Vec<PairRows>| {
+            if let Some(r) = pair_rows(mesh, psi, pair) {
+                if r.min_value(phi) < eps_qp {
+                    out.push(r);
+                }
+            }
+        })
+    }
+
+    /// Every pair of disjoint contact elements with a free vertex, allowed by the mesh's
+    /// contact filter, whose distance can fall below `thickness` somewhere on the straight
+    /// motion from `psi` to `phi`, sorted by pair: the pairs with
+    /// `d_ψ < thickness + max |u(p) − u(q)|` up to the boxes' looseness (a superset: the
+    /// distance of two elements is 1-Lipschitz in the relative displacement of their vertices,
+    /// so the others stay at least `thickness` apart along the whole motion). The broad phase
+    /// of the continuous check ([`crate::contact::continuous`]) and of the linearized rows of
+    /// the SQP outer method.
+    pub fn candidates(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        thickness: f64,
+    ) -> Vec<ContactPair> {
+        self.traverse(
+            mesh,
+            psi,
+            phi,
+            thickness,
+            &|pair, out: &mut Vec<ContactPair>| out.push(pair),
+        )
+    }
+
+    /// The dual traversal: `emit(pair, out)` for every pair of disjoint contact elements with a
+    /// free vertex, allowed by the contact filter, whose gap at ψ is at most `reach0` plus the
+    /// largest relative displacement of its vertices (the test of the module documentation);
+    /// the output sorted by pair.
+    fn traverse<R: Send + HasPair>(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        reach0: f64,
+        emit: &(dyn Fn(ContactPair, &mut Vec<R>) + Sync),
+    ) -> Vec<R> {
         let u: Vec<f64> = phi.iter().zip(psi).map(|(a, b)| a - b).collect();
         let filter = mesh.filter();
-        // One pair: first the same bound on the two elements alone (cheap), then the exact
-        // rows.
-        let test = |pair: ContactPair, minus: &[usize], plus: &[usize], out: &mut Vec<PairRows>| {
+        // One pair: first the same bound on the two elements alone (cheap), then `emit`.
+        let test = |pair: ContactPair, minus: &[usize], plus: &[usize], out: &mut Vec<R>| {
             if all_fixed(mesh, pair) {
                 return;
             }
@@ -142,14 +186,10 @@ impl<const D: usize> MotionSearch<D> {
                 }
             }
             let gap = box_gap(&points_box::<D>(psi, minus), &points_box::<D>(psi, plus));
-            if gap > (eps_qp + reach.sqrt()) * (1.0 + SLACK) {
+            if gap > (reach0 + reach.sqrt()) * (1.0 + SLACK) {
                 return;
             }
-            if let Some(r) = pair_rows(mesh, psi, pair) {
-                if r.min_value(phi) < eps_qp {
-                    out.push(r);
-                }
-            }
+            emit(pair, out);
         };
         let norm: Vec<f64> = u
             .chunks(D)
@@ -163,9 +203,9 @@ impl<const D: usize> MotionSearch<D> {
         // the sum of the largest displacements (tighter where the boxes are loose).
         let keep = |ta: &Bvh<D>, ua: &Moved<D>, tb: &Bvh<D>, ub: &Moved<D>, i: usize, j: usize| {
             let reach = box_reach(&ua.boxes[i], &ub.boxes[j]).min(ua.norms[i] + ub.norms[j]);
-            box_gap(&ta.node_box(i), &tb.node_box(j)) <= (eps_qp + reach) * (1.0 + SLACK)
+            box_gap(&ta.node_box(i), &tb.node_box(j)) <= (reach0 + reach) * (1.0 + SLACK)
         };
-        let mut out: Vec<PairRows> = if D == 2 {
+        let mut out: Vec<R> = if D == 2 {
             let (tv, te) = (&self.vertex_tree, &self.edge_tree);
             tv.dual(
                 Some(te),
@@ -216,8 +256,66 @@ impl<const D: usize> MotionSearch<D> {
             ));
             out
         };
-        out.sort_unstable_by_key(|r| r.pair);
+        out.sort_unstable_by_key(|r| r.pair());
         out
+    }
+}
+
+/// What the traversal's outputs are sorted by.
+trait HasPair {
+    fn pair(&self) -> ContactPair;
+}
+
+impl HasPair for PairRows {
+    fn pair(&self) -> ContactPair {
+        self.pair
+    }
+}
+
+impl HasPair for ContactPair {
+    fn pair(&self) -> ContactPair {
+        *self
+    }
+}
+
+/// A [`MotionSearch`] in the mesh's dimension (2 or 3), chosen at run time.
+pub enum AnyMotionSearch {
+    /// A 2D mesh.
+    Two(MotionSearch<2>),
+    /// A 3D mesh.
+    Three(MotionSearch<3>),
+}
+
+impl AnyMotionSearch {
+    /// [`MotionSearch::new`] in `mesh.dim`.
+    pub fn new(mesh: &Mesh, psi: &[f64]) -> AnyMotionSearch {
+        if mesh.dim == 2 {
+            AnyMotionSearch::Two(MotionSearch::new(mesh, psi))
+        } else {
+            AnyMotionSearch::Three(MotionSearch::new(mesh, psi))
+        }
+    }
+
+    /// [`MotionSearch::violated`].
+    pub fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
+        match self {
+            AnyMotionSearch::Two(s) => s.violated(mesh, psi, phi, eps_qp),
+            AnyMotionSearch::Three(s) => s.violated(mesh, psi, phi, eps_qp),
+        }
+    }
+
+    /// [`MotionSearch::candidates`].
+    pub fn candidates(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        thickness: f64,
+    ) -> Vec<ContactPair> {
+        match self {
+            AnyMotionSearch::Two(s) => s.candidates(mesh, psi, phi, thickness),
+            AnyMotionSearch::Three(s) => s.candidates(mesh, psi, phi, thickness),
+        }
     }
 }
 

@@ -15,6 +15,7 @@ use crate::solve::dynamics::{
 use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use crate::solve::settings::{tol_kappa, Accuracy};
+use crate::solve::sqp::OuterMethod;
 use anyhow::Result;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings, DEFAULT_BACKEND};
 use std::time::Instant;
@@ -40,6 +41,8 @@ pub struct CaseSettings {
     pub time_limit_s: Option<f64>,
     /// The inner steps' Newton model.
     pub newton_model: HessianModel,
+    /// The outer method.
+    pub outer_method: OuterMethod,
 }
 
 /// A finished case.
@@ -126,6 +129,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
         settings.inner.max_inner = k;
     }
     settings.inner.hessian_model = cs.newton_model;
+    settings.method = cs.outer_method;
     settings
 }
 

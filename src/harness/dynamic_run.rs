@@ -174,6 +174,7 @@ fn run_prepared(
         max_inner: Some(rs.max_inner),
         time_limit_s: None,
         newton_model: rs.hessian_model,
+        outer_method: rs.outer_method,
     };
     let qps = rs.qp_settings();
     let out = a
@@ -285,6 +286,7 @@ fn run_prepared(
             tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
             max_outer: cs.max_outer,
             pruning: cs.pruning,
+            method: cs.outer_method,
             ..Default::default()
         },
     };

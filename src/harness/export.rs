@@ -70,6 +70,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         max_outer: a.max_outer,
         max_inner: None,
         newton_model: Default::default(),
+        outer_method: Default::default(),
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -112,6 +112,8 @@ pub struct CaseColumns {
     pub accuracy: String,
     /// Pruning mode.
     pub pruning: String,
+    /// Outer method (`pantz`, `sqp`).
+    pub outer_method: String,
 }
 
 /// What every kind of run row can say about itself: how a failed run (an error, a panic)
@@ -148,6 +150,10 @@ pub struct StaticRow {
     pub status: String,
     /// Outer iterations.
     pub outer_iterations: Option<usize>,
+    /// Outer steps that were SQP steps (0 for the `pantz` method).
+    pub sqp_steps: Option<usize>,
+    /// Outer steps where the SQP step collapsed and Pantz's step was taken.
+    pub fallback_steps: Option<usize>,
     /// Inner iterations.
     pub inner_iterations: Option<usize>,
     /// Backend iterations.
@@ -233,6 +239,8 @@ impl StaticRow {
             max_inner: Some(o.max_inner),
             status: r.status.as_str().to_string(),
             outer_iterations: Some(r.outer_iterations),
+            sqp_steps: Some(r.sqp_steps),
+            fallback_steps: Some(r.fallback_steps),
             inner_iterations: Some(r.inner_iterations),
             backend_iterations: Some(r.backend_iterations),
             final_energy: Some(r.energy),
@@ -559,9 +567,9 @@ mod tests {
     /// header breaks `--resume` on every committed CSV.
     #[test]
     fn headers_are_the_published_ones() {
-        let case = "key,scene,n,eps_rule,params,backend,accuracy,pruning";
-        let stat = "dim,h,eps,qp_tol,tol_j,max_inner,status,outer_iterations,inner_iterations,\
-                    backend_iterations,final_energy,min_distance,all_admissible,energy_monotone,\
+        let case = "key,scene,n,eps_rule,params,backend,accuracy,pruning,outer_method";
+        let stat = "dim,h,eps,qp_tol,tol_j,max_inner,status,outer_iterations,sqp_steps,\
+                    fallback_steps,inner_iterations,backend_iterations,final_energy,min_distance,all_admissible,energy_monotone,\
                     residual_hm1,bound,ratio,lambda_norm_h,c_phi,max_edges_per_vertex,\
                     stationarity_rel,kappa,pairs,active_rows,wall_time_s,t_pairs_s,t_assembly_s,\
                     t_solve_s,t_diagnostics_s,energy_error,position_error_h1,max_violation,\
@@ -623,7 +631,7 @@ mod tests {
         );
         let line = String::from_utf8(csv_line(&row).unwrap()).unwrap();
         assert!(
-            line.starts_with("\"a|b,c\",,20,,,,,,,0.1,,,1e-10,,error,"),
+            line.starts_with("\"a|b,c\",,20,,,,,,,,0.1,,,1e-10,,error,"),
             "{line}"
         );
         assert!(

@@ -24,6 +24,7 @@ use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
+use crate::solve::sqp::OuterMethod;
 use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
@@ -87,6 +88,11 @@ pub struct RunArgs {
     /// projected, the previous model). docs/method.md, "The Newton model".
     #[arg(long, default_value = "shifted", value_parser = parse_newton_model)]
     pub newton_model: HessianModel,
+    /// The outer method: pantz (the paper's T(ψ) steps) or sqp (steps on the linearized true
+    /// distances, with a correction, an exact and a continuous check, Pantz's step as the
+    /// fallback). docs/method.md, "The SQP outer method".
+    #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
+    pub outer_method: OuterMethod,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -153,6 +159,15 @@ fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
     }
 }
 
+fn parse_outer_method(s: &str) -> Result<OuterMethod, String> {
+    OuterMethod::from_name(s).ok_or_else(|| {
+        format!(
+            "--outer-method {s:?}: expected one of {}",
+            OuterMethod::names()
+        )
+    })
+}
+
 fn parse_pruning(s: &str) -> Result<Pruning, String> {
     Pruning::from_name(s)
         .ok_or_else(|| format!("--pruning {s:?}: expected one of lazy, trust-region, all-pairs"))
@@ -190,8 +205,14 @@ struct Summary {
     eps: f64,
     backend: String,
     pruning: &'static str,
+    /// The outer method (`pantz`, `sqp`).
+    outer_method: &'static str,
     status: &'static str,
     outer_iterations: usize,
+    /// Outer steps that were SQP steps (0 for `pantz`).
+    sqp_steps: usize,
+    /// Outer steps where the SQP step collapsed and Pantz's step was taken (0 for `pantz`).
+    fallback_steps: usize,
     inner_iterations: usize,
     backend_iterations: usize,
     initial_energy: f64,
@@ -264,6 +285,11 @@ fn scene_from_file(
     from_file!("accuracy", accuracy, |v: String| parse_accuracy(&v)
         .map_err(anyhow::Error::msg));
     from_file!("no_warm_start", warm_start);
+    if !explicit("outer_method") {
+        if let Some(m) = &s.outer_method {
+            settings.outer_method = parse_outer_method(m).map_err(anyhow::Error::msg)?;
+        }
+    }
     if !explicit("newton_model") {
         if let Some(m) = &s.newton_model {
             settings.hessian_model = parse_newton_model(m).map_err(anyhow::Error::msg)?;
@@ -294,6 +320,7 @@ impl RunArgs {
             warm_start: !self.no_warm_start,
             time_limit_s: self.time_limit,
             hessian_model: self.newton_model,
+            outer_method: self.outer_method,
         }
     }
 }
@@ -425,6 +452,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let qps = rs.qp_settings();
     let mut backend = backend_from_name(&rs.backend, &qps)?;
     let settings = rs.outer_settings();
+    let method = settings.method;
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
@@ -566,8 +594,11 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         eps: scene.eps,
         backend: rs.backend.clone(),
         pruning: settings.pruning.as_str(),
+        outer_method: method.as_str(),
         status: res.status.as_str(),
         outer_iterations: res.outer_iterations,
+        sqp_steps: res.sqp_steps,
+        fallback_steps: res.fallback_steps,
         inner_iterations: res.inner_iterations,
         backend_iterations: res.backend_iterations,
         initial_energy: energies[0].1,
@@ -591,10 +622,15 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{}: status {} after {} outer iterations, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        "{}: status {} after {} outer iterations{}, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
+        if method == OuterMethod::Sqp {
+            format!(" ({} sqp, {} pantz fallback)", res.sqp_steps, res.fallback_steps)
+        } else {
+            String::new()
+        },
         res.energy,
         res.certificate.kappa,
         state,

@@ -14,6 +14,7 @@ use crate::scene::file::{
 use crate::solve::dynamics::Scheme;
 use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
+use crate::solve::sqp::OuterMethod;
 use std::path::Path;
 
 /// Reads, checks and builds a scene file for a run: [`crate::scene::file::load_with`] with
@@ -47,6 +48,15 @@ impl RunRules for SolveRules {
                     key: "newton_model".into(),
                     value: format!("{m:?}"),
                     reason: "expected one of shifted, projected".into(),
+                });
+            }
+        }
+        if let Some(m) = &s.outer_method {
+            if OuterMethod::from_name(m).is_none() {
+                return Err(Refusal {
+                    key: "outer_method".into(),
+                    value: format!("{m:?}"),
+                    reason: format!("expected one of {}", OuterMethod::names()),
                 });
             }
         }
@@ -126,6 +136,13 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
         .and_then(HessianModel::from_name)
     {
         s.hessian_model = m;
+    }
+    if let Some(m) = spec
+        .outer_method
+        .as_deref()
+        .and_then(OuterMethod::from_name)
+    {
+        s.outer_method = m;
     }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);

@@ -23,6 +23,7 @@ use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
+use crate::solve::sqp::OuterMethod;
 use anyhow::{bail, Context, Result};
 use contactlab_solvers::{BACKEND_NAMES, DEFAULT_BACKEND};
 use rayon::prelude::*;
@@ -189,6 +190,8 @@ pub struct Common {
     pub time_limit_s: Option<f64>,
     /// The inner steps' Newton model: `shifted` (default) or `projected`.
     pub newton_model: Option<String>,
+    /// The outer method: `pantz` or `sqp` (default: [`OuterMethod::default`]).
+    pub outer_method: Option<String>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -385,6 +388,7 @@ struct BlockSettings {
     max_inner: Option<usize>,
     time_limit_s: Option<f64>,
     newton_model: Option<HessianModel>,
+    outer_method: OuterMethod,
     reference: Option<ReferenceSpec>,
 }
 
@@ -424,6 +428,15 @@ impl BlockSettings {
                         format!("{at}: newton_model {m:?}: expected shifted or projected")
                     })?,
             ),
+        };
+        let outer_method = match c.outer_method.as_ref().or(defaults.outer_method.as_ref()) {
+            None => OuterMethod::default(),
+            Some(m) => OuterMethod::from_name(m).with_context(|| {
+                format!(
+                    "{at}: outer_method {m:?}: expected one of {}",
+                    OuterMethod::names()
+                )
+            })?,
         };
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
@@ -491,6 +504,7 @@ impl BlockSettings {
             max_inner,
             time_limit_s,
             newton_model,
+            outer_method,
             reference,
         })
     }
@@ -517,6 +531,7 @@ impl BlockSettings {
             max_inner: self.max_inner,
             time_limit_s: self.time_limit_s,
             newton_model: self.newton_model.unwrap_or_default(),
+            outer_method: self.outer_method,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -536,13 +551,14 @@ impl BlockSettings {
 }
 
 /// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
-/// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit and a Newton
-/// model other than the default only when set, so that the keys of sweeps without them stay as
-/// they were.
+/// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
+/// model other than the default and an outer method other than `pantz` only when set, so that
+/// the keys of sweeps without them (and of every run made before the SQP method) stay as they
+/// were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -562,6 +578,11 @@ fn run_key(spec: &RunSpec) -> String {
             String::new()
         } else {
             format!("|model={}", s.newton_model.as_str())
+        },
+        if s.outer_method == OuterMethod::Pantz {
+            String::new()
+        } else {
+            format!("|method={}", s.outer_method.as_str())
         }
     )
 }
@@ -803,6 +824,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         max_outer: spec.settings.max_outer.max(10_000),
         max_inner: None,
         newton_model: Default::default(),
+        outer_method: spec.settings.outer_method,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,
@@ -827,6 +849,7 @@ impl RunSpec {
             backend: self.settings.backend.clone(),
             accuracy: self.settings.accuracy.as_str().to_string(),
             pruning: self.settings.pruning.as_str().to_string(),
+            outer_method: self.settings.outer_method.as_str().to_string(),
         }
     }
 }
@@ -1069,6 +1092,24 @@ mod tests {
         assert!(m.contains("time_limit_s = 0 must be > 0"), "{m}");
         let m = err("[[scene]]\nname = \"drop\"\ndynamic = true\ntime_limit_s = 5");
         assert!(m.contains("static runs only"), "{m}");
+        // outer_method: pantz (the default) leaves the key as it was, sqp is named in it, a
+        // block overrides the defaults, an unknown name is an error naming the choices
+        assert!(runs[0].settings.outer_method == OuterMethod::Pantz);
+        let runs = parse(
+            "[defaults]\nouter_method = \"sqp\"\n[[scene]]\nname = \"ring\"\nn = [20]\n\
+             [[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"pantz\"",
+        )
+        .unwrap();
+        assert_eq!(runs[0].settings.outer_method, OuterMethod::Sqp);
+        assert!(runs[0].key.ends_with("|method=sqp"), "{}", runs[0].key);
+        assert_eq!(runs[0].case_columns().outer_method, "sqp");
+        assert_eq!(runs[1].settings.outer_method, OuterMethod::Pantz);
+        assert!(!runs[1].key.contains("method="), "{}", runs[1].key);
+        let m = err("[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"newton\"");
+        assert!(
+            m.contains("outer_method \"newton\"") && m.contains("pantz, sqp"),
+            "{m}"
+        );
     }
 
     #[test]

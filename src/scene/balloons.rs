@@ -255,7 +255,7 @@ pub fn classify_state(touching: &[(usize, usize)]) -> String {
     }
 }
 
-/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`; level
+/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`, `height0..height3` (the `--heights` of `contactlab run`); level
 /// `n` elements per membrane, `h = 1.6/n`; end states classified by [`classify_state`].
 pub struct Balloons;
 
@@ -278,8 +278,12 @@ impl BuiltinScene for Balloons {
                 "perturb1" => p.perturb[1] = v,
                 "perturb2" => p.perturb[2] = v,
                 "perturb3" => p.perturb[3] = v,
+                "height0" => p.heights[0] = v,
+                "height1" => p.heights[1] = v,
+                "height2" => p.heights[2] = v,
+                "height3" => p.heights[3] = v,
                 other => anyhow::bail!(
-                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3)"
+                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3, height0..height3)"
                 ),
             }
         }

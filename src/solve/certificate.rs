@@ -144,7 +144,7 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Entries `(col, value)` of `Σ coef·n` at each vertex, merged and restricted to free dofs.
-fn gradient_entries(
+pub(crate) fn gradient_entries(
     dim: usize,
     col: &[usize],
     parts: &[(usize, f64)],

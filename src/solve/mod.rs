@@ -12,4 +12,5 @@ pub mod observer;
 pub mod outer;
 pub mod qp_units;
 pub mod settings;
+pub mod sqp;
 pub mod subproblem;

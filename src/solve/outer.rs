@@ -9,7 +9,7 @@
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
 //! frames or a progress line.
 
-use crate::contact::motion::MotionSearch;
+use crate::contact::motion::AnyMotionSearch;
 use crate::contact::MinDistance;
 use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
@@ -19,9 +19,10 @@ use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{certificate, Certificate, CertificateError};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
+use crate::solve::sqp::{sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep};
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{
-    solve_subproblem, DofMap, InnerSettings, RowOracle, SubproblemResult, TrustBox,
+    solve_subproblem, DofMap, InnerSettings, ModelShift, RowOracle, SubproblemResult, TrustBox,
 };
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
@@ -110,6 +111,11 @@ pub struct OuterSettings {
     pub qp_in_run_units: bool,
     /// Maximum number of outer steps.
     pub max_outer: usize,
+    /// The outer method: Pantz's T(ψ) steps, or SQP steps on the linearized true distances
+    /// with Pantz's step as their fallback ([`crate::solve::sqp`]).
+    pub method: OuterMethod,
+    /// Settings of the SQP steps.
+    pub sqp: SqpSettings,
     /// Which pairs the sub-problems carry.
     pub pruning: Pruning,
     /// Lazy rows: the initial working set of an outer step holds the pairs closer than
@@ -140,6 +146,8 @@ impl Default for OuterSettings {
             qp_tol: 1e-9,
             qp_in_run_units: false,
             max_outer: 2000,
+            method: OuterMethod::default(),
+            sqp: SqpSettings::default(),
             pruning: Pruning::Lazy,
             lazy_start: 0.25,
             trust: TrustSettings::default(),
@@ -225,6 +233,16 @@ pub struct IterationRecord {
     pub t_assembly_s: f64,
     /// Seconds in the backend.
     pub t_solve_s: f64,
+    /// The step taken: `pantz` (a T(ψ) step of the Pantz method), `sqp` (an SQP step),
+    /// `fallback` (the SQP step collapsed and Pantz's step was taken; its counts include the
+    /// SQP attempt's), `none` (iteration 0).
+    pub step: &'static str,
+    /// The SQP step's length `t` (NaN for a T(ψ) step).
+    pub step_length: f64,
+    /// The SQP step's second-order correction QPs.
+    pub corrections: usize,
+    /// The SQP step's trials rejected by the exact or the continuous check.
+    pub rejections: usize,
 }
 
 /// Invalid input to a run.
@@ -289,6 +307,10 @@ pub struct RunResult {
     pub polish: Option<Polish>,
     /// The ψ of the last sub-problem (the rows of `last_rows` are those of T(ψ)).
     pub psi: Vec<f64>,
+    /// Outer steps that were SQP steps ([`OuterMethod::Sqp`]).
+    pub sqp_steps: usize,
+    /// Outer steps where the SQP step collapsed and Pantz's step was taken.
+    pub fallback_steps: usize,
 }
 
 /// The outcome of the final polish at ε (docs/method.md, "The row margin").
@@ -356,7 +378,7 @@ pub fn median_edge_length(mesh: &Mesh, x: &[f64]) -> f64 {
 }
 
 /// The lazy-row oracle at ψ (see [`RowOracle`]): the rows of T(ψ) below `ε + δ` at φ that are
-/// not carried yet, found by relative displacement ([`MotionSearch`]: a pair can only be
+/// not carried yet, found by relative displacement ([`crate::contact::motion::MotionSearch`]: a pair can only be
 /// violated when its elements' relative motion since ψ can close its gap at ψ; the trees at ψ
 /// are built at the first call and reused for the whole outer step). Of those, per point (or
 /// first edge) only the most violated pair is returned.
@@ -366,57 +388,43 @@ fn lazy_oracle<'a>(
     eps_qp: f64,
 ) -> impl FnMut(&[f64], &[PairRows]) -> Vec<PairRows> + 'a {
     let mut carried: HashSet<ContactPair> = HashSet::new();
-    let mut search: Option<Search> = None;
+    let mut search: Option<AnyMotionSearch> = None;
     move |phi: &[f64], rows: &[PairRows]| {
         if carried.len() != rows.len() {
             carried = rows.iter().map(|r| r.pair).collect();
         }
-        let search = search.get_or_insert_with(|| Search::new(mesh, psi));
+        let search = search.get_or_insert_with(|| AnyMotionSearch::new(mesh, psi));
         let mut violated = search.violated(mesh, psi, phi, eps_qp);
         violated.retain(|r| !carried.contains(&r.pair));
         // Per point (or first edge), only the most violated pair: the QP solved again with
         // these moves the point, and the oracle is asked again about the next point found.
-        let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
-        for (i, r) in violated.iter().enumerate() {
-            let key = match r.pair {
-                ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
-                ContactPair::EdgeEdge { a, .. } => usize::MAX / 2 + a,
-            };
-            let v = r.min_value(phi);
-            let e = best.entry(key).or_insert((v, i));
-            if v < e.0 || (v == e.0 && i < e.1) {
-                *e = (v, i);
-            }
-        }
-        let mut pick: Vec<usize> = best.into_values().map(|(_, i)| i).collect();
-        pick.sort_unstable();
+        let pick = most_violated_per_point(violated.iter().map(|r| (r.pair, r.min_value(phi))));
         let added: Vec<PairRows> = pick.into_iter().map(|i| violated[i]).collect();
         carried.extend(added.iter().map(|r| r.pair));
         added
     }
 }
 
-/// [`MotionSearch`] in the mesh's dimension.
-enum Search {
-    Two(MotionSearch<2>),
-    Three(MotionSearch<3>),
-}
-
-impl Search {
-    fn new(mesh: &Mesh, psi: &[f64]) -> Search {
-        if mesh.dim == 2 {
-            Search::Two(MotionSearch::new(mesh, psi))
-        } else {
-            Search::Three(MotionSearch::new(mesh, psi))
+/// The indices of the pairs to add to a working set, of `(pair, value)` (values below the
+/// row level): per point (the vertex of a point pair, the first edge of an edge–edge pair) the
+/// pair of smallest value (the first on ties), in index order.
+pub(crate) fn most_violated_per_point(
+    violated: impl Iterator<Item = (ContactPair, f64)>,
+) -> Vec<usize> {
+    let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
+    for (i, (pair, v)) in violated.enumerate() {
+        let key = match pair {
+            ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
+            ContactPair::EdgeEdge { a, .. } => usize::MAX / 2 + a,
+        };
+        let e = best.entry(key).or_insert((v, i));
+        if v < e.0 || (v == e.0 && i < e.1) {
+            *e = (v, i);
         }
     }
-
-    fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
-        match self {
-            Search::Two(s) => s.violated(mesh, psi, phi, eps_qp),
-            Search::Three(s) => s.violated(mesh, psi, phi, eps_qp),
-        }
-    }
+    let mut pick: Vec<usize> = best.into_values().map(|(_, i)| i).collect();
+    pick.sort_unstable();
+    pick
 }
 
 /// What every outer step of one run shares.
@@ -525,8 +533,23 @@ impl StepContext<'_> {
             dmax >= (1.0 - 1e-3) * tb.delta
         });
         drop(oracle);
+        Ok(self.finish(k, sub, t_pairs_s, delta, box_active, None))
+    }
+
+    /// The record of step `k` whose sub-problem (or SQP step) ended at `sub.y`: its exact
+    /// minimum distance (`md`, or computed here), energy scale and active rows.
+    fn finish(
+        &self,
+        k: usize,
+        sub: SubproblemResult,
+        t_pairs_s: f64,
+        delta: f64,
+        box_active: bool,
+        md: Option<MinDistance>,
+    ) -> Step {
+        let (mesh, eps, settings) = (self.mesh, self.eps, self.settings);
         let tc = Instant::now();
-        let md = min_distance(mesh, &sub.y, 2.0 * eps, true);
+        let md = md.unwrap_or_else(|| min_distance(mesh, &sub.y, 2.0 * eps, true));
         let t_check = tc.elapsed().as_secs_f64();
         let e_new = energy_scale(self.energy, &sub.y, self.norms);
         // Active: within twice the run's margin of ε (the same count with or without it).
@@ -563,15 +586,110 @@ impl StepContext<'_> {
             t_pairs_s: t_pairs_s + sub.t_pairs_s + t_check,
             t_assembly_s: sub.t_assembly_s,
             t_solve_s: sub.t_solve_s,
+            step: "pantz",
+            step_length: f64::NAN,
+            corrections: 0,
+            rejections: 0,
         };
-        Ok(Step {
+        Step {
             sub,
             record,
             min_distance: md,
             box_active,
             energy_scale: e_new,
-        })
+        }
     }
+
+    /// The SQP step `k` from the admissible `x` ([`crate::solve::sqp`]): its [`Step`] when it
+    /// was accepted or `x` is stationary for it, and the attempt's counts (charged to the
+    /// fallback step when it collapsed).
+    #[allow(clippy::too_many_arguments)]
+    fn sqp(
+        &self,
+        x: &[f64],
+        jx: f64,
+        k: usize,
+        d_prev: f64,
+        e_scale: f64,
+        warm: &HashMap<ContactPair, [f64; 4]>,
+        shift: &mut ModelShift,
+        backend: &mut dyn QpBackend,
+    ) -> Result<(Option<Step>, SqpStep), RunError> {
+        let settings = self.settings;
+        let mut inner = settings.inner.clone();
+        inner.energy_scale = Some(e_scale);
+        inner.length_scale = settings.qp_in_run_units.then_some(self.norms.free.ell);
+        let sctx = SqpContext {
+            mesh: self.mesh,
+            energy: self.energy,
+            eps: self.eps,
+            dofs: self.dofs,
+            inner: &inner,
+            sqp: &settings.sqp,
+            roundoff: self.roundoff,
+            start_radius: d_prev.min(settings.lazy_start * self.hbar),
+        };
+        let warm_mu: HashMap<ContactPair, f64> =
+            warm.iter().map(|(p, m)| (*p, m.iter().sum())).collect();
+        let mut s = sqp_step(&sctx, x, jx, &warm_mu, shift, backend)?;
+        let (y, energy, md) = match s.accepted.take() {
+            Some(a) => a,
+            None if s.stationary => (
+                x.to_vec(),
+                jx,
+                min_distance(self.mesh, x, 2.0 * self.eps, true),
+            ),
+            None => return Ok((None, s)),
+        };
+        let sub = SubproblemResult {
+            y,
+            energy,
+            inner_iterations: 1,
+            backend_iterations: s.backend_iterations,
+            qp_status: s.qp_status,
+            line_search_failed: false,
+            line_search_stalled: false,
+            rows: std::mem::take(&mut s.rows),
+            multipliers: std::mem::take(&mut s.multipliers),
+            lazy_rounds: s.lazy_rounds,
+            t_pairs_s: s.t_pairs_s,
+            t_assembly_s: s.t_assembly_s,
+            t_solve_s: s.t_solve_s,
+            timed_out: false,
+        };
+        let mut step = self.finish(k, sub, 0.0, 0.0, false, Some(md));
+        step.record.step = "sqp";
+        step.record.step_length = s.step_length;
+        step.record.corrections = s.corrections;
+        step.record.rejections = s.rejections;
+        Ok((Some(step), s))
+    }
+}
+
+/// Whether the outer loop keeps an SQP step `s` that produced a point (accepted, or `x` itself
+/// when stationary) and lowered J by `decrease`: always when `x` is stationary for the
+/// linearized problem or no safeguard cut the step; a step that a safeguard (the exact or
+/// the continuous check, a failed correction) cut and that lowered J by at most the stopping
+/// rule's `tol` is no evidence of a fixed point, and Pantz's step is taken instead.
+pub(crate) fn keep_sqp_step(s: &SqpStep, decrease: f64, tol: f64) -> bool {
+    s.stationary || !(s.limited && decrease <= tol)
+}
+
+/// A Pantz step taken because the SQP attempt `s` collapsed: the attempt's QP solves, backend
+/// iterations and times are charged to it.
+fn charge_fallback(step: &mut Step, s: &SqpStep) {
+    step.sub.inner_iterations += 1;
+    step.sub.backend_iterations += s.backend_iterations;
+    let r = &mut step.record;
+    r.step = "fallback";
+    r.inner_iterations += 1;
+    r.lazy_rounds += s.lazy_rounds;
+    r.backend_iterations += s.backend_iterations;
+    r.corrections = s.corrections;
+    r.rejections = s.rejections;
+    r.t_pairs_s += s.t_pairs_s;
+    r.t_assembly_s += s.t_assembly_s;
+    r.t_solve_s += s.t_solve_s;
 }
 
 /// The outer loop as a [`Loop`]: an event is an iterate and its record, the outcome the
@@ -700,6 +818,10 @@ pub fn run_observed(
             t_pairs_s: t_pairs0,
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
+            step: "none",
+            step_length: f64::NAN,
+            corrections: 0,
+            rejections: 0,
         },
         x: &x,
         rows: &[],
@@ -719,6 +841,8 @@ pub fn run_observed(
         wall_time_s: 0.0,
         polish: None,
         psi: Vec::new(),
+        sqp_steps: 0,
+        fallback_steps: 0,
     };
     // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
     // last sub-problem stalled in its line search.
@@ -741,14 +865,42 @@ pub fn run_observed(
     };
     // The ψ of the last accepted step.
     let mut psi = x.clone();
+    // The last step was an SQP step (its polish is about T(x) at the final x), and the
+    // Newton model's shift carried from one SQP step to the next.
+    let mut last_sqp = false;
+    let mut shift = ModelShift::default();
     for k in 1..=settings.max_outer {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             result.status = RunStatus::TimeLimit;
             break;
         }
-        let step = ctx.step(
-            &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
-        )?;
+        let step = match settings.method {
+            OuterMethod::Pantz => ctx.step(
+                &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
+            )?,
+            OuterMethod::Sqp => {
+                let (step, attempt) =
+                    ctx.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
+                // A step that a safeguard cut and that moved J by less than the stopping
+                // rule's tolerance is no evidence of a fixed point: take Pantz's step.
+                let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+                match step {
+                    Some(st) if keep_sqp_step(&attempt, jx - st.sub.energy, tol) => {
+                        result.sqp_steps += 1;
+                        st
+                    }
+                    _ => {
+                        let mut st = ctx.step(
+                            &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
+                        )?;
+                        charge_fallback(&mut st, &attempt);
+                        result.fallback_steps += 1;
+                        st
+                    }
+                }
+            }
+        };
+        last_sqp = step.record.step == "sqp";
         let sub = step.sub;
         result.outer_iterations = k;
         result.inner_iterations += sub.inner_iterations;
@@ -822,6 +974,12 @@ pub fn run_observed(
     // from the margin δ. Kept only if admissible, solved, and not above J.
     if settings.polish && stopped_by_rule {
         let k = result.outer_iterations;
+        // After an SQP step the natural neighbourhood is T(x) at the final x: at a KKT point
+        // of (3) (rows at ε + δ) x is a KKT point of min J over T(x) too (the weighted sum of
+        // a pair's rows is its distance's linearization), so the polish moves by O(δ).
+        if last_sqp {
+            psi = x.clone();
+        }
         let step = ctx.step(
             &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
         )?;

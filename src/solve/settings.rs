@@ -22,6 +22,7 @@
 
 use crate::energy::HessianModel;
 use crate::solve::outer::{OuterSettings, Pruning, TrustSettings};
+use crate::solve::sqp::OuterMethod;
 use contactlab_solvers::{default_settings, preset_tolerances, QpSettings, BACKEND_NAMES};
 use thiserror::Error;
 
@@ -125,6 +126,8 @@ pub struct RunSettings {
     pub time_limit_s: Option<f64>,
     /// The Hessian of the inner steps' quadratic model.
     pub hessian_model: HessianModel,
+    /// The outer method: `pantz` (the paper's T(ψ) steps) or `sqp`.
+    pub outer_method: OuterMethod,
 }
 
 impl Default for RunSettings {
@@ -143,6 +146,7 @@ impl Default for RunSettings {
             warm_start: outer.inner.warm_start,
             time_limit_s: outer.time_limit_s,
             hessian_model: outer.inner.hessian_model,
+            outer_method: outer.method,
         }
     }
 }
@@ -263,6 +267,7 @@ impl RunSettings {
         settings.inner.max_inner = self.max_inner;
         settings.inner.warm_start = self.warm_start;
         settings.inner.hessian_model = self.hessian_model;
+        settings.method = self.outer_method;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

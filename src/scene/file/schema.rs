@@ -36,6 +36,8 @@ pub struct SolverSpec {
     pub warm_start: Option<bool>,
     /// The inner steps' Newton model: `shifted` or `projected`.
     pub newton_model: Option<String>,
+    /// The outer method: `pantz` or `sqp`.
+    pub outer_method: Option<String>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,

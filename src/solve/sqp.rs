@@ -1,0 +1,648 @@
+//! The SQP outer method: one step of a sequential quadratic program on problem (3) with the
+//! true distances, kept admissible by a correction, an exact check and a continuous check
+//! (docs/method.md, "The SQP outer method").
+//!
+//! Pantz's T(ψ) freezes each pair's normal at ψ and gives each vertex of the far element its
+//! own row, so within one outer step an edge cannot turn about its contact point and a vertex
+//! cannot slide round a corner: a fixed point of ψ ↦ argmin_{T(ψ)} J is not in general a
+//! minimum of (3) (§5, Lemma 5.6). Remark 5.9 points at the neighbourhood that has the
+//! optimality conditions (9) of (3) itself: one row per pair, the distance linearized at the
+//! current iterate x,
+//!
+//! ```text
+//!     d_k(x) + ∇d_k(x)·s ≥ ε + δ,     ∇d_k(x)·s = Σ_i w_i n·(s(plus_i) − s(minus_i)),
+//! ```
+//!
+//! `n` and the weights `w_i` those of the pair's rows of T(x) (the closest points' barycentric
+//! weights; eq. 8, 12, 13), so that the row is the weighted sum of the pair's rows of T(x).
+//! That set is not inside A_{h,ε}; it is used as a search direction only:
+//!
+//! 1. **The QP** `min g·s + ½sᵀPs` over those rows, `P` the Newton model of the sub-problems
+//!    (`crate::solve::subproblem::build_qp`: the model Hessian, its shift, the proximal term,
+//!    the rank-one terms through auxiliary variables), solved by the run's backend. Rows are
+//!    carried lazily: first the pairs closer than `ε + δ + min(D_prev, lazy_start·h̄)`, then,
+//!    after each solve, the pairs whose linearized row the solution violates (the candidates
+//!    of [`AnyMotionSearch::candidates`]: the weighted row is at least `d_k(x)` minus the
+//!    largest relative displacement of the pair's vertices), the most violated per point, and
+//!    the QP is solved again until none is.
+//! 2. **A backtracking line search on J** along `s` (Armijo, `c₁ = 1e-4`, halving). At each
+//!    trial `z = x + t s`:
+//!    - **second-order correction**: while some pair is closer than `ε + δ/2` at z, z moves to
+//!      the projection onto the close pairs' rows linearized at z itself,
+//!      `min ½cᵀDc` s.t. `d_k(z) + ∇d_k(z)·c ≥ ε + δ`, `D` the diagonal of the model
+//!      (`diagonal_metric`), solved in units of the largest gap to close (at most
+//!      [`SqpSettings::corrections`] rounds). Measured on the asymmetric balloons n = 40/160:
+//!      with the full model as the metric and unscaled, 152/419 outer steps; with these two,
+//!      82/173;
+//!    - **acceptance**: `J(z) ≤ J(x) + c₁ t g·s`, the exact admissibility check at z
+//!      (`min_distance ≥ ε` up to round-off, as every iterate), and the continuous check of the
+//!      straight motion x → z ([`crate::contact::continuous`]): no pair comes closer than
+//!      `η = ccd_thickness·ε` on the way, so nothing passes through anything.
+//! 3. **Stationary**: the QP step has a non-negative slope, so x is a KKT point of the
+//!    linearized problem, which has the true distances' gradients: (9) of (3) (Lemma 5.1,
+//!    Lemma 5.3) at the level `ε + δ`.
+//! 4. **Collapsed**: no trial passed, or the QP failed. The outer loop then takes Pantz's step
+//!    from x (Lemma 4.2 keeps it admissible), and it takes it too when a safeguard (the exact or
+//!    the continuous check, or a correction) cut the step and J moved by less than the
+//!    stopping rule's tolerance: such a step is not evidence of a fixed point.
+//!
+//! Every accepted iterate is admissible (checked exactly) and J decreases.
+
+use crate::contact::continuous::first_contact;
+use crate::contact::motion::AnyMotionSearch;
+use crate::contact::{min_distance, near_pairs, pair_rows, ContactPair, MinDistance, PairRows};
+use crate::energy::Objective;
+use crate::scene::mesh::Mesh;
+use crate::solve::certificate::gradient_entries;
+use crate::solve::outer::most_violated_per_point;
+use crate::solve::qp_units::solve_in_units;
+use crate::solve::subproblem::{build_qp, DofMap, InnerSettings, ModelShift};
+use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpSolution, QpStatus, WarmStart};
+use std::collections::{HashMap, HashSet};
+use std::time::Instant;
+
+/// Which outer method the run uses (docs/method.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OuterMethod {
+    /// Pantz's map ψ ↦ argmin { J(φ) : φ ∈ T(ψ) } (§3, §4.1): the paper's method, and the
+    /// default (docs/method.md, "The SQP outer method", says why).
+    #[default]
+    Pantz,
+    /// Steps of a sequential quadratic program on (3) with the true distances linearized at
+    /// the iterate (this module), falling back to Pantz's step where they collapse.
+    Sqp,
+}
+
+impl OuterMethod {
+    /// Every method.
+    pub const ALL: [OuterMethod; 2] = [OuterMethod::Pantz, OuterMethod::Sqp];
+
+    /// The name on the command line, in scene and sweep files, CSV and JSON.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            OuterMethod::Pantz => "pantz",
+            OuterMethod::Sqp => "sqp",
+        }
+    }
+
+    /// Parses [`OuterMethod::as_str`].
+    pub fn from_name(s: &str) -> Option<OuterMethod> {
+        OuterMethod::ALL.into_iter().find(|m| m.as_str() == s)
+    }
+
+    /// The names, for messages: `pantz, sqp`.
+    pub fn names() -> String {
+        OuterMethod::ALL.map(|m| m.as_str()).join(", ")
+    }
+}
+
+impl std::fmt::Display for OuterMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Settings of the SQP steps.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SqpSettings {
+    /// Thickness `η` of the continuous check, relative to ε: no pair may come closer than
+    /// `η` on the way from one iterate to the next (0 < η ≤ ε; docs/method.md says why not ε
+    /// itself).
+    pub ccd_thickness: f64,
+    /// Halvings of the line search before the step counts as collapsed.
+    pub max_halvings: usize,
+    /// Second-order correction rounds per trial point at most.
+    pub corrections: usize,
+}
+
+impl Default for SqpSettings {
+    fn default() -> Self {
+        SqpSettings {
+            ccd_thickness: 0.5,
+            max_halvings: 30,
+            corrections: 3,
+        }
+    }
+}
+
+/// What one SQP step needs from the run.
+pub(crate) struct SqpContext<'a> {
+    pub mesh: &'a Mesh,
+    pub energy: &'a dyn Objective,
+    pub eps: f64,
+    pub dofs: &'a DofMap,
+    /// The sub-problems' settings, with the run's energy (and length) scale set.
+    pub inner: &'a InnerSettings,
+    pub sqp: &'a SqpSettings,
+    /// The round-off allowance of the exact check.
+    pub roundoff: f64,
+    /// The first working set's radius beyond `ε + δ`.
+    pub start_radius: f64,
+}
+
+/// The outcome of one SQP step.
+pub(crate) struct SqpStep {
+    /// The accepted point, its energy and exact minimum distance (`None`: nothing accepted).
+    pub accepted: Option<(Vec<f64>, f64, MinDistance)>,
+    /// The QP step's slope is non-negative (or at round-off): x is stationary for the
+    /// linearized problem.
+    pub stationary: bool,
+    /// The step length taken (0 when none).
+    pub step_length: f64,
+    /// A safeguard (the exact check, the continuous check or a failed correction) rejected a
+    /// longer step.
+    pub limited: bool,
+    /// Correction QPs solved.
+    pub corrections: usize,
+    /// Trials rejected by the exact or the continuous check.
+    pub rejections: usize,
+    /// QP re-solves because lazy rows were added.
+    pub lazy_rounds: usize,
+    /// Backend iterations of all its QPs.
+    pub backend_iterations: usize,
+    /// Status of the step's QP (the last lazy re-solve).
+    pub qp_status: QpStatus,
+    /// The carried pairs' rows of T(x) (their weighted sums are the linearized rows).
+    pub rows: Vec<PairRows>,
+    /// The QP's multiplier of each pair spread over the pair's rows by their weights, so that
+    /// `Σ_i μ_i ∇row_i = μ ∇d`.
+    pub multipliers: Vec<[f64; 4]>,
+    pub t_pairs_s: f64,
+    pub t_assembly_s: f64,
+    pub t_solve_s: f64,
+}
+
+impl SqpStep {
+    /// A step that took nothing yet.
+    pub(crate) fn empty() -> SqpStep {
+        SqpStep {
+            accepted: None,
+            stationary: false,
+            step_length: 0.0,
+            limited: false,
+            corrections: 0,
+            rejections: 0,
+            lazy_rounds: 0,
+            backend_iterations: 0,
+            qp_status: QpStatus::Solved,
+            rows: Vec::new(),
+            multipliers: Vec::new(),
+            t_pairs_s: 0.0,
+            t_assembly_s: 0.0,
+            t_solve_s: 0.0,
+        }
+    }
+}
+
+/// The linearized row of a pair: `Σ_i w_i · row_i(φ)`, its gradient on the free columns.
+fn linear_value(r: &PairRows, phi: &[f64]) -> f64 {
+    let v = r.values(phi);
+    (0..r.len).map(|i| r.weight[i] * v[i]).sum()
+}
+
+/// The gradient `∇d` of a pair's distance at the rows' point, on the free columns.
+fn distance_gradient(dim: usize, col: &[usize], r: &PairRows) -> Vec<(usize, f64)> {
+    let mut parts: Vec<(usize, f64)> = Vec::with_capacity(2 * r.len);
+    for i in 0..r.len {
+        parts.push((r.plus[i], r.weight[i]));
+        parts.push((r.minus[i], -r.weight[i]));
+    }
+    gradient_entries(dim, col, &parts, &[r.n.x, r.n.y, r.n.z])
+}
+
+/// `base` (the model and its rank-one rows) with the rows `d_k + ∇d_k·s ≥ level` of `rows`
+/// (built at the point the QP is about) put first, and `q` replaced when given.
+fn with_distance_rows(
+    base: &Qp,
+    dim: usize,
+    col: &[usize],
+    rows: &[PairRows],
+    level: &dyn Fn(&PairRows) -> f64,
+    q: Option<Vec<f64>>,
+) -> Result<Qp, QpError> {
+    let mc = rows.len();
+    let n = base.n();
+    let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(8 * mc + base.a.nnz());
+    let mut l = Vec::with_capacity(mc + base.m());
+    for (k, r) in rows.iter().enumerate() {
+        for (c, v) in distance_gradient(dim, col, r) {
+            trip.push((k, c, v));
+        }
+        l.push(level(r) - r.distance);
+    }
+    for j in 0..base.a.ncols {
+        for idx in base.a.colptr[j]..base.a.colptr[j + 1] {
+            trip.push((base.a.rowval[idx] + mc, j, base.a.nzval[idx]));
+        }
+    }
+    l.extend_from_slice(&base.l);
+    let mut u = vec![f64::INFINITY; mc];
+    u.extend_from_slice(&base.u);
+    Ok(Qp {
+        p: base.p.clone(),
+        q: q.unwrap_or_else(|| base.q.clone()),
+        a: CscMatrix::from_triplets(mc + base.m(), n, &trip)?,
+        l,
+        u,
+    })
+}
+
+/// The metric of the second-order correction: the diagonal of the model Hessian `p` (each
+/// entry at least `1e-6` times the largest). The full model would let the correction move
+/// along the model's soft modes (a balloon's rigid motion costs only the shift), far from the
+/// close pairs and at a first-order cost in J (measured on the asymmetric balloons n = 40:
+/// corrections of 1.4e-6 where δ/2 = 2e-9 was needed, each costing 2.2e-4 in J, so that the
+/// line search cut every step to t = 1/64); the diagonal moves the close pairs' vertices.
+fn diagonal_metric(p: &CscMatrix) -> Result<CscMatrix, QpError> {
+    let n = p.ncols;
+    let mut d = vec![0.0f64; n];
+    for (j, dj) in d.iter_mut().enumerate() {
+        for idx in p.colptr[j]..p.colptr[j + 1] {
+            if p.rowval[idx] == j {
+                *dj += p.nzval[idx];
+            }
+        }
+    }
+    let top = d.iter().fold(0.0f64, |a, &v| a.max(v));
+    let floor = if top > 0.0 { 1e-6 * top } else { 1.0 };
+    let trip: Vec<(usize, usize, f64)> = d
+        .iter()
+        .enumerate()
+        .map(|(j, &v)| (j, j, v.max(floor)))
+        .collect();
+    CscMatrix::from_triplets(n, n, &trip)
+}
+
+/// Solves `qp` in the run's units when the settings say so (as the sub-problems do).
+fn solve(
+    backend: &mut dyn QpBackend,
+    qp: &Qp,
+    warm: Option<&WarmStart>,
+    inner: &InnerSettings,
+) -> Result<QpSolution, QpError> {
+    match (inner.energy_scale, inner.length_scale) {
+        (Some(e), Some(l)) => solve_in_units(backend, qp, warm, e, l),
+        _ => backend.solve(qp, warm),
+    }
+}
+
+/// `x` plus the free columns of `s` (fixed dofs unchanged).
+fn add_free(x: &[f64], s: &[f64], col: &[usize], scale: f64) -> Vec<f64> {
+    x.iter()
+        .zip(col)
+        .map(|(&xi, &c)| {
+            if c == usize::MAX {
+                xi
+            } else {
+                xi + scale * s[c]
+            }
+        })
+        .collect()
+}
+
+/// One SQP step from the admissible `x` (J(x) = `jx`): the QP on the linearized rows, then the
+/// line search with its correction and checks (module documentation). `warm`: the last
+/// multiplier of each pair; `shift`: the Newton model's shift, kept from step to step.
+pub(crate) fn sqp_step(
+    ctx: &SqpContext,
+    x: &[f64],
+    jx: f64,
+    warm: &HashMap<ContactPair, f64>,
+    shift: &mut ModelShift,
+    backend: &mut dyn QpBackend,
+) -> Result<SqpStep, QpError> {
+    let (mesh, eps, inner) = (ctx.mesh, ctx.eps, ctx.inner);
+    let col = &ctx.dofs.col;
+    let dim = mesh.dim;
+    let delta = inner.margin_rel * eps + inner.margin_abs;
+    let eps_qp = eps + delta;
+    let mut out = SqpStep::empty();
+    // The QP's row level (each row at ε + δ; a closure so that a per-pair level can be
+    // tried), and the correction: pairs closer than `trigger` at a trial are moved to
+    // `target`.
+    let row_level = |_: &PairRows| eps_qp;
+    let (trigger, target) = (eps + 0.5 * delta, eps_qp);
+    let tp = Instant::now();
+    let search = AnyMotionSearch::new(mesh, x);
+    let mut rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
+        .into_iter()
+        .filter_map(|p| pair_rows(mesh, x, p))
+        .collect();
+    let mut carried: HashSet<ContactPair> = rows.iter().map(|r| r.pair).collect();
+    out.t_pairs_s += tp.elapsed().as_secs_f64();
+    let ta = Instant::now();
+    let (base, g) = build_qp(
+        mesh,
+        ctx.energy,
+        ctx.dofs,
+        &[],
+        x,
+        eps_qp,
+        None,
+        inner,
+        shift,
+    )?;
+    out.t_assembly_s += ta.elapsed().as_secs_f64();
+    // The QP over the carried rows; solved again with the rows its solution violates.
+    let mut warm_y: Option<Vec<f64>> = inner.warm_start.then(|| {
+        let mut y: Vec<f64> = rows
+            .iter()
+            .map(|r| -warm.get(&r.pair).copied().unwrap_or(0.0))
+            .collect();
+        y.resize(rows.len() + base.m(), 0.0);
+        y
+    });
+    let (qp, sol) = loop {
+        let ta = Instant::now();
+        let qp = with_distance_rows(&base, dim, col, &rows, &row_level, None)?;
+        out.t_assembly_s += ta.elapsed().as_secs_f64();
+        let ts = Instant::now();
+        let ws = warm_y.take().map(|y| WarmStart { x: Vec::new(), y });
+        let sol = solve(backend, &qp, ws.as_ref(), inner)?;
+        out.t_solve_s += ts.elapsed().as_secs_f64();
+        out.backend_iterations += sol.iterations;
+        out.qp_status = sol.status;
+        if sol.status != QpStatus::Solved {
+            out.rows = rows;
+            out.multipliers = vec![[0.0; 4]; out.rows.len()];
+            return Ok(out);
+        }
+        let tp = Instant::now();
+        let full = add_free(x, &sol.x, col, 1.0);
+        let violated: Vec<(PairRows, f64)> = search
+            .candidates(mesh, x, &full, eps_qp)
+            .into_iter()
+            .filter(|p| !carried.contains(p))
+            .filter_map(|p| pair_rows(mesh, x, p))
+            .map(|r| {
+                let v = linear_value(&r, &full);
+                (r, v)
+            })
+            .filter(|(r, v)| *v < row_level(r))
+            .collect();
+        out.t_pairs_s += tp.elapsed().as_secs_f64();
+        if violated.is_empty() {
+            break (qp, sol);
+        }
+        let pick = most_violated_per_point(violated.iter().map(|(r, v)| (r.pair, *v)));
+        let nold = rows.len();
+        for i in pick {
+            carried.insert(violated[i].0.pair);
+            rows.push(violated[i].0);
+        }
+        out.lazy_rounds += 1;
+        warm_y = inner.warm_start.then(|| {
+            let mut y = sol.y[..nold].to_vec();
+            y.resize(rows.len(), 0.0);
+            y.extend_from_slice(&sol.y[nold..]);
+            y
+        });
+    };
+    out.multipliers = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let mu = (-sol.y[k]).max(0.0);
+            let mut m = [0.0; 4];
+            for (i, mi) in m.iter_mut().enumerate().take(r.len) {
+                *mi = r.weight[i] * mu;
+            }
+            m
+        })
+        .collect();
+    let s = &sol.x;
+    let slope: f64 = col
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c != usize::MAX)
+        .map(|(dof, &c)| g[dof] * s[c])
+        .sum();
+    let scale = inner.energy_scale.unwrap_or(jx.abs().max(1.0));
+    let round_off = (1e-12 * scale).max(64.0 * f64::EPSILON * jx.abs());
+    if slope >= 0.0 || -slope <= round_off {
+        out.stationary = true;
+        out.rows = rows;
+        return Ok(out);
+    }
+    // The correction's metric: the diagonal of the model (see `diagonal_metric`).
+    let metric = diagonal_metric(&base.p)?;
+    // The line search: correction, sufficient decrease, exact check, continuous check.
+    let eta = ctx.sqp.ccd_thickness * eps;
+    let mut t = 1.0f64;
+    for _ in 0..=ctx.sqp.max_halvings {
+        let mut z = add_free(x, s, col, t);
+        let mut ok = true;
+        for round in 0..=ctx.sqp.corrections {
+            let tp = Instant::now();
+            let mut fix: Vec<PairRows> = Vec::new();
+            let mut close = false;
+            let mut crossed = false;
+            let mut seen: HashSet<ContactPair> = HashSet::new();
+            let near = search.candidates(mesh, x, &z, trigger);
+            for p in rows.iter().map(|r| r.pair).chain(near) {
+                if !seen.insert(p) {
+                    continue;
+                }
+                match pair_rows(mesh, &z, p) {
+                    None => crossed = true,
+                    Some(r) => {
+                        if r.distance < trigger {
+                            close = true;
+                        }
+                        if r.distance < trigger {
+                            fix.push(r);
+                        }
+                    }
+                }
+            }
+            out.t_pairs_s += tp.elapsed().as_secs_f64();
+            if crossed {
+                ok = false;
+                break;
+            }
+            if !close || round == ctx.sqp.corrections {
+                break;
+            }
+            let ta = Instant::now();
+            let mut cqp =
+                with_distance_rows(&base, dim, col, &fix, &|_| target, Some(vec![0.0; qp.n()]))?;
+            cqp.p = metric.clone();
+            // In units of the largest gap to close (at least δ): the gaps are about δ, far
+            // below the backend's absolute tolerance in the run's units, and unscaled the
+            // backend returned corrections 200 times too long (module documentation).
+            let gap = fix
+                .iter()
+                .map(|r| target - r.distance)
+                .fold(delta, f64::max);
+            for v in cqp.l.iter_mut().take(fix.len()) {
+                *v /= gap;
+            }
+            out.t_assembly_s += ta.elapsed().as_secs_f64();
+            let ts = Instant::now();
+            let mut c = solve(backend, &cqp, None, inner)?;
+            for v in c.x.iter_mut() {
+                *v *= gap;
+            }
+            out.t_solve_s += ts.elapsed().as_secs_f64();
+            out.backend_iterations += c.iterations;
+            out.corrections += 1;
+            if c.status != QpStatus::Solved {
+                ok = false;
+                break;
+            }
+            z = add_free(&z, &c.x, col, 1.0);
+        }
+        if !ok {
+            out.limited = true;
+            t *= 0.5;
+            continue;
+        }
+        let jz = ctx.energy.value(&z);
+        if !(jz.is_finite() && jz <= jx + 1e-4 * t * slope) {
+            t *= 0.5;
+            continue;
+        }
+        let tp = Instant::now();
+        let md = min_distance(mesh, &z, 2.0 * eps, true);
+        let admissible = md.distance >= eps - ctx.roundoff;
+        let tunnels = admissible
+            && first_contact(mesh, &search, x, &z, eta.min(eps - ctx.roundoff)).is_some();
+        out.t_pairs_s += tp.elapsed().as_secs_f64();
+        if !admissible || tunnels {
+            out.rejections += 1;
+            out.limited = true;
+            t *= 0.5;
+            continue;
+        }
+        out.step_length = t;
+        out.accepted = Some((z, jz, md));
+        break;
+    }
+    out.rows = rows;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::min_distance_brute_force;
+    use crate::scene::balloons::{build, BalloonsParams};
+    use crate::solve::outer::{keep_sqp_step, run, IterationRecord, OuterSettings, RunStatus};
+    use contactlab_solvers::{backend_from_name, default_settings};
+
+    #[test]
+    fn names_round_trip() {
+        for m in OuterMethod::ALL {
+            assert_eq!(OuterMethod::from_name(m.as_str()), Some(m));
+        }
+        assert_eq!(OuterMethod::from_name("newton"), None);
+        assert_eq!(OuterMethod::names(), "pantz, sqp");
+        assert_eq!(OuterMethod::default(), OuterMethod::Pantz);
+    }
+
+    /// Asymmetric balloons n = 8 (a sliding contact) with the SQP method and `sqp`: every
+    /// iterate checked by the all-pairs distance, J non-increasing; the records and iterates.
+    fn sqp_run(sqp: SqpSettings) -> (Vec<IterationRecord>, RunStatus, f64) {
+        let scene = build(&BalloonsParams {
+            n: 8,
+            heights: [0.9, 0.2, 0.9, 0.2],
+            ..Default::default()
+        })
+        .unwrap();
+        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+        let settings = OuterSettings {
+            method: OuterMethod::Sqp,
+            sqp,
+            max_outer: 200,
+            ..Default::default()
+        };
+        let mut records: Vec<IterationRecord> = Vec::new();
+        let eps = scene.eps;
+        let mesh = &scene.mesh;
+        let res = run(
+            mesh,
+            &scene.energy,
+            eps,
+            &scene.x0,
+            b.as_mut(),
+            &settings,
+            &mut |r, x| {
+                let d = min_distance_brute_force(mesh, x).distance;
+                assert!(
+                    d >= eps * (1.0 - 1e-12),
+                    "iterate {} ({}) at distance {d:e} < eps {eps:e}",
+                    r.iteration,
+                    r.step
+                );
+                records.push(r.clone());
+            },
+        )
+        .unwrap();
+        for w in records.windows(2) {
+            assert!(
+                w[1].energy <= w[0].energy,
+                "J rose from {} to {} at {} ({})",
+                w[0].energy,
+                w[1].energy,
+                w[1].iteration,
+                w[1].step
+            );
+        }
+        assert_eq!(res.sqp_steps + res.fallback_steps, res.outer_iterations);
+        (records, res.status, res.certificate.kappa)
+    }
+
+    #[test]
+    fn sqp_steps_are_admissible_and_lower_j() {
+        let (records, status, kappa) = sqp_run(SqpSettings::default());
+        assert_eq!(records[0].step, "none");
+        let sqp = records.iter().filter(|r| r.step == "sqp").count();
+        assert!(sqp >= 1, "no SQP step taken: {records:?}");
+        for r in records.iter().filter(|r| r.step == "sqp") {
+            assert!((0.0..=1.0).contains(&r.step_length));
+            assert!(r.admissible);
+        }
+        // the status follows the certificate
+        match status {
+            RunStatus::Converged => assert!(kappa <= 1e-5, "kappa {kappa:e}"),
+            RunStatus::FixedPoint => assert!(kappa > 1e-5, "kappa {kappa:e}"),
+            s => panic!("status {s:?}"),
+        }
+    }
+
+    #[test]
+    fn collapsed_steps_fall_back_to_pantz_and_stay_admissible() {
+        // One trial per step (no halving, no correction): a step whose full length fails
+        // the decrease or a check collapses and the loop takes Pantz's step.
+        let (records, _, _) = sqp_run(SqpSettings {
+            max_halvings: 0,
+            corrections: 0,
+            ..Default::default()
+        });
+        let fallbacks: Vec<&IterationRecord> =
+            records.iter().filter(|r| r.step == "fallback").collect();
+        assert!(!fallbacks.is_empty(), "no fallback: {records:?}");
+        for r in fallbacks {
+            assert!(r.admissible);
+            assert!(r.step_length.is_nan());
+            // the collapsed attempt's QP is charged to the step
+            assert!(r.inner_iterations >= 2, "{r:?}");
+        }
+    }
+
+    #[test]
+    fn a_cut_step_with_no_decrease_is_not_kept() {
+        let mut s = SqpStep::empty();
+        // accepted, uncut: kept whatever its decrease
+        assert!(keep_sqp_step(&s, 0.0, 1e-9));
+        // cut by a safeguard: kept only with a decrease above the tolerance
+        s.limited = true;
+        assert!(!keep_sqp_step(&s, 1e-10, 1e-9));
+        assert!(keep_sqp_step(&s, 1e-8, 1e-9));
+        // stationary: kept (the stopping rule then decides)
+        s.stationary = true;
+        assert!(keep_sqp_step(&s, 0.0, 1e-9));
+    }
+}
