@@ -12,6 +12,7 @@ Usage (from the repository root, after `cargo build --release`):
     python3 experiments/benchmarks.py scenes          # the committed example scene files
     python3 experiments/benchmarks.py patch           # results/patch_test.csv
     python3 experiments/benchmarks.py hertz2d         # results/hertz2d*.csv
+    python3 experiments/benchmarks.py hertz2d_sqp     # results/hertz2d_sqp*.csv (elastic, sqp)
     python3 experiments/benchmarks.py hertz3d         # results/hertz3d*.csv
     python3 experiments/benchmarks.py units           # results/units.csv
 
@@ -530,19 +531,33 @@ def hertz_measure(out, ref, body, dim=2, L0=1.0, E0=1.0, surface=None):
 def hertz2d(args):
     """results/hertz2d.csv (a and p0 against h_c and eps, rigid and elastic flat) and
     results/hertz2d_profile.csv (the pressure profiles)."""
-    work = os.path.join(args.work, "hertz2d")
-    os.makedirs(work, exist_ok=True)
-    rows, prof = [], []
     cases = [("rigid", lvl, 1e-2) for lvl in range(args.levels)]
     cases += [("rigid", args.eps_level, e) for e in (1e-1, 1e-3, 1e-4)]
     cases += [("elastic", lvl, 1e-2) for lvl in range(args.elastic_levels)]
     cases += [("elastic", args.eps_level, e) for e in (1e-1, 1e-3)]
+    hertz2d_study(os.path.join(args.work, "hertz2d"), cases, [], "hertz2d", False)
+
+
+def hertz2d_sqp(args):
+    """results/hertz2d_sqp.csv and results/hertz2d_sqp_profile.csv: the elastic-flat levels of
+    `hertz2d` run with `--outer-method sqp`, with the certificate (Pantz's outer map creeps
+    there and stops at uncertified fixed points)."""
+    cases = [("elastic", lvl, 1e-2) for lvl in range(args.elastic_levels)]
+    hertz2d_study(os.path.join(args.work, "hertz2d_sqp"), cases,
+                  ["--outer-method", "sqp"], "hertz2d_sqp", True)
+
+
+def hertz2d_study(work, cases, extra, stem, with_kappa):
+    """Runs the Hertz 2D `cases` ((flat, level, eps/h_c)) with the extra `contactlab run`
+    arguments and writes results/<stem>.csv and results/<stem>_profile.csv."""
+    os.makedirs(work, exist_ok=True)
+    rows, prof = [], []
     for flat, lvl, er in cases:
         name = "hertz2d_%s_l%d_eps%g" % (flat, lvl, er)
         scene = os.path.join(work, name + ".toml")
         ref = hertz2d_scene(scene, lvl, flat, er)
         out = os.path.join(work, name)
-        code, dt, summ = run(scene, out)
+        code, dt, summ = run(scene, out, extra)
         m = hertz_measure(out, ref, "cylinder", surface=ref["surface"]["cylinder"])
         row = {"flat": flat, "level": lvl, "h_c": ref["hc"], "eps": ref["eps"], "eps_over_hc": er,
                "vertices": summ["n"], "status": summ["status"],
@@ -557,6 +572,12 @@ def hertz2d(args):
                "max_dev_profile_two_sided": m["max_dev_two_sided"],
                "err_p0_two_sided": abs(m["p0_two_sided"] - ref["p0"]) / ref["p0"],
                "wall_time_s": round(dt, 2)}
+        if with_kappa:
+            row["outer_method"] = summ.get("outer_method")
+            row["sqp_steps"] = summ.get("sqp_steps")
+            row["fallback_steps"] = summ.get("fallback_steps")
+            row["kappa"] = summ["certificate"]["kappa"]
+            row["final_energy"] = summ["final_energy"]
         if flat == "elastic":
             mf = hertz_measure(out, ref, "flat", surface=ref["surface"]["flat"])
             row["a_moment_flat"] = mf["a_moment"]
@@ -589,9 +610,9 @@ def hertz2d(args):
     fields = []
     for r in rows:
         fields += [k for k in r if k not in fields]
-    write_csv(os.path.join(ROOT, "results", "hertz2d.csv"),
+    write_csv(os.path.join(ROOT, "results", stem + ".csv"),
               [{k: fmt(v) for k, v in r.items()} for r in rows], fields)
-    write_csv(os.path.join(ROOT, "results", "hertz2d_profile.csv"),
+    write_csv(os.path.join(ROOT, "results", stem + "_profile.csv"),
               [{k: fmt(v) for k, v in r.items()} for r in prof], list(prof[0].keys()))
 
 
@@ -758,7 +779,7 @@ def scenes(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["scenes", "patch", "hertz2d", "hertz3d", "units"])
+    ap.add_argument("what", choices=["scenes", "patch", "hertz2d", "hertz2d_sqp", "hertz3d", "units"])
     ap.add_argument("--work", default=os.path.join(ROOT, "runs", "benchmarks"))
     ap.add_argument("--levels", type=int, default=4, help="mesh levels of the rigid-flat study")
     ap.add_argument("--elastic-levels", type=int, default=3,
