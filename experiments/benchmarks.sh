@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The classical contact benchmarks (results/README.md, "Contact benchmarks"): the committed
 # example scene files, the patch test, Hertz 2D and 3D, and their plots.
-# Usage: bash experiments/benchmarks.sh [scenes|patch|hertz2d|hertz3d|units|plots ...]  (default: all)
+# Usage: bash experiments/benchmarks.sh [scenes|patch|hertz2d|hertz2d_sqp|hertz3d|units|plots ...]  (default: all)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
@@ -9,10 +9,10 @@ source scripts/ensure-cmake.sh
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
 export CONTACTLAB_BIN=$bin
 steps=("$@")
-[ ${#steps[@]} -gt 0 ] || steps=(scenes patch hertz2d hertz3d units plots)
+[ ${#steps[@]} -gt 0 ] || steps=(scenes patch hertz2d hertz2d_sqp hertz3d units plots)
 for s in "${steps[@]}"; do
   case $s in
-    scenes|patch|hertz2d|hertz3d|units) python3 experiments/benchmarks.py "$s" ;;
+    scenes|patch|hertz2d|hertz2d_sqp|hertz3d|units) python3 experiments/benchmarks.py "$s" ;;
     plots)
       for lvl in 0 3; do
         "$bin" plot results/hertz2d_profile.csv --x x_over_a \
