@@ -649,63 +649,24 @@ impl QpBackend for IpBackend {
 mod tests {
     use super::*;
     use crate::clarabel_backend::ClarabelBackend;
-    use crate::qp::tests::small_qp;
+    use crate::qp::tests::{
+        assert_bad_bounds_rejected, assert_equality_and_infeasible, assert_solves_small_qp,
+    };
     use crate::qp::CscMatrix;
 
     #[test]
     fn solves_small_qp_with_crate_dual_signs() {
-        let qp = small_qp();
-        let s = IpBackend::new(QpSettings::default())
-            .solve(&qp, None)
-            .unwrap();
-        assert_eq!(s.status, QpStatus::Solved);
-        // The optimum is (0.8, 0.2), the upper row 0 and the lower bound of row 1 active.
-        assert!(
-            (s.x[0] - 0.8).abs() < 1e-7 && (s.x[1] - 0.2).abs() < 1e-7,
-            "{:?}",
-            s.x
-        );
-        assert!(qp.dual_residual(&s.x, &s.y) < 1e-7);
-        assert!(s.y[0] > 0.0, "upper bound active → y ≥ 0: {:?}", s.y);
-        assert!(s.y[1] < 0.0, "lower bound active → y ≤ 0: {:?}", s.y);
-        assert_eq!(s.y[2], 0.0);
+        assert_solves_small_qp(&mut IpBackend::new(QpSettings::default()), 1e-7);
     }
 
     #[test]
     fn equality_rows_and_an_infeasible_qp() {
-        let mut qp = small_qp();
-        qp.l[2] = 0.1;
-        qp.u[2] = 0.1;
-        let mut b = IpBackend::new(QpSettings::default());
-        let s = b.solve(&qp, None).unwrap();
-        assert_eq!(s.status, QpStatus::Solved);
-        assert!(
-            (s.x[0] - 0.9).abs() < 1e-7 && (s.x[1] - 0.1).abs() < 1e-7,
-            "{:?}",
-            s.x
-        );
-        assert!(qp.dual_residual(&s.x, &s.y) < 1e-7);
-        // x0 ≥ 0.95 and x0 + x1 ≤ 1 with x1 = 0.1: infeasible, never `Solved`.
-        qp.l[1] = 0.95;
-        let s = b.solve(&qp, None).unwrap();
-        assert_ne!(s.status, QpStatus::Solved);
+        assert_equality_and_infeasible(&mut IpBackend::new(QpSettings::default()));
     }
 
     #[test]
     fn bad_input_is_an_error() {
-        let mut qp = small_qp();
-        qp.l[1] = 6.0;
-        let e = IpBackend::new(QpSettings::default())
-            .solve(&qp, None)
-            .unwrap_err();
-        assert_eq!(
-            e,
-            QpError::InvalidBounds {
-                row: 1,
-                l: 6.0,
-                u: 5.0
-            }
-        );
+        assert_bad_bounds_rejected(&mut IpBackend::new(QpSettings::default()));
     }
 
     /// A chain of points in 2D pressed down onto a line by a linear load, springs between

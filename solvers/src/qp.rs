@@ -302,6 +302,63 @@ pub(crate) mod tests {
         }
     }
 
+    /// `b` solves [`small_qp`]: x = (0.8, 0.2), the crate's dual signs (upper bound active →
+    /// y ≥ 0, lower → y ≤ 0, a free row 0), dual residual below `dual_tol`. Returns the
+    /// solution (shared by the backends' unit tests).
+    pub(crate) fn assert_solves_small_qp(
+        b: &mut dyn crate::backend::QpBackend,
+        dual_tol: f64,
+    ) -> crate::backend::QpSolution {
+        let qp = small_qp();
+        let s = b.solve(&qp, None).unwrap();
+        assert_eq!(s.status, crate::backend::QpStatus::Solved);
+        // The unconstrained optimum (1, 1) violates x0 + x1 ≤ 1; (0.5, 0.5) violates x0 ≥ 0.8.
+        assert!(
+            (s.x[0] - 0.8).abs() < 1e-7 && (s.x[1] - 0.2).abs() < 1e-7,
+            "{:?}",
+            s.x
+        );
+        assert!(qp.dual_residual(&s.x, &s.y) < dual_tol);
+        assert!(s.y[0] > 0.0, "upper bound active → y ≥ 0: {:?}", s.y);
+        assert!(s.y[1] < 0.0, "lower bound active → y ≤ 0: {:?}", s.y);
+        assert_eq!(s.y[2], 0.0);
+        s
+    }
+
+    /// `b` solves [`small_qp`] with row 2 an equality (x1 = 0.1: x = (0.9, 0.1)), and does not
+    /// call the QP solved once x0 ≥ 0.95 makes it infeasible.
+    pub(crate) fn assert_equality_and_infeasible(b: &mut dyn crate::backend::QpBackend) {
+        use crate::backend::QpStatus;
+        let mut qp = small_qp();
+        qp.l[2] = 0.1;
+        qp.u[2] = 0.1;
+        let s = b.solve(&qp, None).unwrap();
+        assert_eq!(s.status, QpStatus::Solved);
+        assert!(
+            (s.x[0] - 0.9).abs() < 1e-7 && (s.x[1] - 0.1).abs() < 1e-7,
+            "{:?}",
+            s.x
+        );
+        assert!(qp.dual_residual(&s.x, &s.y) < 1e-7);
+        qp.l[1] = 0.95;
+        let s = b.solve(&qp, None).unwrap();
+        assert_ne!(s.status, QpStatus::Solved);
+    }
+
+    /// `b` rejects `l > u` with the named error.
+    pub(crate) fn assert_bad_bounds_rejected(b: &mut dyn crate::backend::QpBackend) {
+        let mut qp = small_qp();
+        qp.l[1] = 6.0;
+        assert_eq!(
+            b.solve(&qp, None).unwrap_err(),
+            QpError::InvalidBounds {
+                row: 1,
+                l: 6.0,
+                u: 5.0
+            }
+        );
+    }
+
     #[test]
     fn triplets_sum_duplicates_and_sort() {
         let m =
