@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # The committed sweeps and their plots, in order. Each sweep resumes (--resume), so a rerun
 # after an interruption runs only the missing rows. Timing sweeps use --jobs 1.
-# Usage: bash experiments/run_all.sh [NAME ...]   (default: all six)
+# Usage: bash experiments/run_all.sh [NAME ...]   (default: all seven)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
 [ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes)
+[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes iterations_methods)
 for name in "${names[@]}"; do
   case $name in
     lemma56|iterations|extremes) jobs=2 ;;
@@ -37,6 +37,13 @@ for name in "${names[@]}"; do
           --group eps_rule --where scene=$s --where max_inner=50 \
           --title "$s, max_inner=50: inner (Newton-type) steps against max(h, eps)^-1" \
           --out results/iterations_inner_$s.svg
+      done ;;
+    iterations_methods)
+      for s in balloons rod; do
+        "$bin" plot results/iterations_methods.csv --x 1/h --y outer_iterations \
+          --group outer_method,eps_rule --where scene=$s \
+          --title "$s (asymmetric start for balloons): outer steps against 1/h, both outer methods" \
+          --out results/iterations_methods_$s.svg
       done ;;
     backends)
       for s in balloons ring; do
