@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # The committed sweeps and their plots, in order. Each sweep resumes (--resume), so a rerun
 # after an interruption runs only the missing rows. Timing sweeps use --jobs 1.
-# Usage: bash experiments/run_all.sh [NAME ...]   (default: all six)
+# Usage: bash experiments/run_all.sh [NAME ...]   (default: all eight)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
 [ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes)
+[ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes iterations_methods lemma56_fixed_points)
 for name in "${names[@]}"; do
   case $name in
     lemma56|iterations|extremes) jobs=2 ;;
@@ -38,6 +38,17 @@ for name in "${names[@]}"; do
           --title "$s, max_inner=50: inner (Newton-type) steps against max(h, eps)^-1" \
           --out results/iterations_inner_$s.svg
       done ;;
+    iterations_methods)
+      for s in balloons rod; do
+        "$bin" plot results/iterations_methods.csv --x 1/h --y outer_iterations \
+          --group outer_method,eps_rule --where scene=$s \
+          --title "$s (asymmetric start for balloons): outer steps against 1/h, both outer methods" \
+          --out results/iterations_methods_$s.svg
+      done ;;
+    lemma56_fixed_points)
+      "$bin" plot results/lemma56_fixed_points.csv --x h --y residual_hm1,bound --group outer_method \
+        --title "Asymmetric balloons: ||R||_H-1 and B against h, Pantz fixed points and sqp end states" \
+        --out results/lemma56_fixed_points.svg ;;
     backends)
       for s in balloons ring; do
         "$bin" plot results/backends.csv --x n --y wall_time_s --group backend \
