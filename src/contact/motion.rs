@@ -401,6 +401,35 @@ mod tests {
         phi
     }
 
+    /// For random motions of each `scale` from `psi` and each `eps`, asserts that `search`
+    /// returns exactly the all-pairs violated rows; returns how many cases had any.
+    #[allow(clippy::too_many_arguments)]
+    fn compare_with_brute<const D: usize>(
+        search: &MotionSearch<D>,
+        rng: &mut ChaCha8Rng,
+        mesh: &Mesh,
+        psi: &[f64],
+        scales: [f64; 3],
+        epss: [f64; 3],
+        trial: usize,
+    ) -> usize {
+        let mut nonempty = 0;
+        for scale in scales {
+            let phi = motion(rng, mesh, psi, scale);
+            for eps in epss {
+                let got: Vec<ContactPair> = search
+                    .violated(mesh, psi, &phi, eps)
+                    .iter()
+                    .map(|r| r.pair)
+                    .collect();
+                let want = brute(mesh, psi, &phi, eps);
+                nonempty += usize::from(!want.is_empty());
+                assert_eq!(got, want, "trial {trial}, scale {scale}, eps {eps}");
+            }
+        }
+        nonempty
+    }
+
     #[test]
     fn motion_2d_finds_exactly_the_violated_all_pairs_rows() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -408,19 +437,15 @@ mod tests {
         for trial in 0..30 {
             let (mesh, psi) = rings_2d(&mut rng, 3, 12 + trial);
             let search = MotionSearch::<2>::new(&mesh, &psi);
-            for scale in [0.01, 0.3, 1.5] {
-                let phi = motion(&mut rng, &mesh, &psi, scale);
-                for eps in [1e-3, 0.05, 0.4] {
-                    let got: Vec<ContactPair> = search
-                        .violated(&mesh, &psi, &phi, eps)
-                        .iter()
-                        .map(|r| r.pair)
-                        .collect();
-                    let want = brute(&mesh, &psi, &phi, eps);
-                    nonempty += usize::from(!want.is_empty());
-                    assert_eq!(got, want, "trial {trial}, scale {scale}, eps {eps}");
-                }
-            }
+            nonempty += compare_with_brute(
+                &search,
+                &mut rng,
+                &mesh,
+                &psi,
+                [0.01, 0.3, 1.5],
+                [1e-3, 0.05, 0.4],
+                trial,
+            );
         }
         assert!(nonempty > 100, "too few motions violate a row: {nonempty}");
     }
@@ -485,19 +510,15 @@ mod tests {
                 ..Default::default()
             };
             let search = MotionSearch::<3>::new(&mesh, &x);
-            for scale in [0.01, 0.2, 0.8] {
-                let phi = motion(&mut rng, &mesh, &x, scale);
-                for eps in [1e-3, 0.05, 0.2] {
-                    let got: Vec<ContactPair> = search
-                        .violated(&mesh, &x, &phi, eps)
-                        .iter()
-                        .map(|r| r.pair)
-                        .collect();
-                    let want = brute(&mesh, &x, &phi, eps);
-                    nonempty += usize::from(!want.is_empty());
-                    assert_eq!(got, want, "trial {trial}, scale {scale}, eps {eps}");
-                }
-            }
+            nonempty += compare_with_brute(
+                &search,
+                &mut rng,
+                &mesh,
+                &x,
+                [0.01, 0.2, 0.8],
+                [1e-3, 0.05, 0.2],
+                trial,
+            );
         }
         assert!(nonempty > 40, "too few motions violate a row: {nonempty}");
     }
