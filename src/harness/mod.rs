@@ -3,7 +3,7 @@
 //! ([`scene_file`]), a case
 //! (scene × backend × preset × pruning, diagnosed: [`case`]), sweeps of cases ([`sweep`]),
 //! the rows they write, one struct per kind of row ([`rows`]: where a column is added),
-//! the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]), contact
+//! starting from a saved state ([`restart`]), the scaling experiment ([`scaling`]), the diagnostics of §5 ([`diagnostics`]), contact
 //! forces, pressures, gaps, reactions and stresses of a run ([`contact_output`]) and QP
 //! export ([`export`], [`capture`]).
 //!
@@ -16,6 +16,7 @@ pub mod contact_output;
 pub mod diagnostics;
 pub mod dynamic_run;
 pub mod export;
+pub mod restart;
 pub mod rows;
 pub mod run;
 pub mod scaling;

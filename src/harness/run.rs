@@ -12,7 +12,7 @@ use crate::harness::diagnostics::{
     contact_pattern, ConvergedDiagnostics, DiagnosticSettings, PairMultiplier,
 };
 use crate::harness::scene_file::{self, load_scene_file};
-use crate::harness::{case, contact_output, dynamic_run};
+use crate::harness::{case, contact_output, dynamic_run, restart};
 use crate::output::run_dir::{Frames, History, RunDir, StaticProgress};
 use crate::output::svg::{projection_svg, shapes_and_energy_svg, write_svg, Shape, Shape3};
 use crate::output::vtk::write_vtu_with;
@@ -20,6 +20,7 @@ use crate::output::write_atomic;
 use crate::scene::balloons::{self, BalloonsParams};
 use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
+use crate::scene::Scene;
 use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
@@ -114,6 +115,14 @@ pub struct RunArgs {
     /// Run directory (default runs/<scene>-default).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Start from the positions of a saved state of the same scene (a run directory's
+    /// `final.vtu` or a frame) instead of the scene's φ_0 (static runs; docs/cli.md).
+    #[arg(long)]
+    pub start_from: Option<PathBuf>,
+    /// With --start-from: move every free dof by A·h·u, u uniform in [−1, 1] (fixed seed),
+    /// halving A until the start is admissible; the A used is in summary.json's params.
+    #[arg(long, default_value_t = 0.0)]
+    pub start_perturb: f64,
     /// Write a VTK frame every K outer iterations (the last is always written).
     #[arg(long, default_value_t = 1)]
     pub frame_every: usize,
@@ -356,6 +365,9 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
 pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let from_file = a.scene.ends_with(".toml");
     let mut rs = a.settings();
+    if a.dynamic && (a.start_from.is_some() || a.start_perturb != 0.0) {
+        bail!("--start-from and --start-perturb are options of static runs, not of --dynamic");
+    }
     if a.dynamic {
         if from_file {
             let (f, params) = scene_from_file(&a, &mut rs, explicit)?;
@@ -447,6 +459,22 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
             let json = registry::params_json(name, n, a.eps, &p)?.unwrap_or_default();
             (scene, json)
         }
+    };
+    let (scene, params) = match &a.start_from {
+        Some(path) => {
+            let st = restart::start_state(&scene, path, a.start_perturb)?;
+            let mut params = params;
+            if let Some(m) = params.as_object_mut() {
+                m.insert("start_from".into(), path.display().to_string().into());
+                m.insert("start_perturb".into(), st.amplitude.into());
+                m.insert("start_unperturbed_vertices".into(), st.unperturbed.into());
+            }
+            (Scene { x0: st.x, ..scene }, params)
+        }
+        None if a.start_perturb != 0.0 => {
+            bail!("--start-perturb perturbs the state of --start-from FILE: give that too")
+        }
+        None => (scene, params),
     };
     validate_cli(&rs)?;
     let qps = rs.qp_settings();
