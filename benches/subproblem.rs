@@ -1,9 +1,11 @@
-//! The sub-problem solver at two sizes (balloons n = 160 and 640, Clarabel at its default
-//! tolerance, lazy rows, the default Newton model): one inner step (the first outer step with
-//! `max_inner = 1`: the QP build, the model shift, the backend and the lazy re-solves) and one
-//! full sub-problem (the first outer step, inner steps uncapped), beside one sparse LDLᵀ of the
-//! first QP's `P` (the Hessian with the proximal term, the shift and the gas' auxiliary
-//! variables), the unit the issue of the sub-problem solver measures an inner step against.
+//! The sub-problem solver at two sizes (balloons n = 160 and 640, lazy rows, the default Newton
+//! model), with Clarabel and with `ip`, each at its default tolerance: one inner step (the
+//! first outer step with `max_inner = 1`: the QP build, the model shift, the backend and the
+//! lazy re-solves) and one full sub-problem (the first outer step, inner steps uncapped),
+//! beside one sparse LDLᵀ of the first QP's `P` (the Hessian with the proximal term, the shift
+//! and the gas' auxiliary variables) and one of `P + AᵀA` (the same with the contact rows'
+//! pattern: what an interior point on the condensed system factorizes at each iteration), the
+//! units an inner step is measured against.
 //!
 //! Run: `cargo bench --bench subproblem` (criterion; results in `target/criterion/`).
 
@@ -15,7 +17,7 @@ use contactlab::scene::Scene;
 use contactlab::solve::outer::{median_edge_length, run, OuterSettings};
 use contactlab::solve::subproblem::{build_qp, DofMap, InnerSettings, ModelShift};
 use contactlab_solvers::linalg::SparseLdl;
-use contactlab_solvers::{backend_from_name, default_settings};
+use contactlab_solvers::{backend_from_name, default_settings, CscMatrix};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 
 fn scene(n: usize) -> Scene {
@@ -27,13 +29,13 @@ fn scene(n: usize) -> Scene {
 }
 
 /// The first outer step with at most `max_inner` inner steps; returns J after it.
-fn first_step(s: &Scene, max_inner: usize) -> f64 {
+fn first_step(s: &Scene, backend: &str, max_inner: usize) -> f64 {
     let mut settings = OuterSettings {
         max_outer: 1,
         ..Default::default()
     };
     settings.inner.max_inner = max_inner;
-    let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+    let mut b = backend_from_name(backend, &default_settings(backend)).unwrap();
     run(
         &s.mesh,
         &s.energy,
@@ -53,12 +55,18 @@ fn bench(c: &mut Criterion) {
     g.measurement_time(Duration::from_secs(20));
     for n in [160usize, 640] {
         let s = scene(n);
-        g.bench_with_input(BenchmarkId::new("one_inner_step", n), &s, |b, s| {
-            b.iter(|| black_box(first_step(s, 1)))
-        });
-        g.bench_with_input(BenchmarkId::new("one_subproblem", n), &s, |b, s| {
-            b.iter(|| black_box(first_step(s, 50)))
-        });
+        for backend in ["clarabel", "ip"] {
+            g.bench_with_input(
+                BenchmarkId::new(format!("one_inner_step/{backend}"), n),
+                &s,
+                |b, s| b.iter(|| black_box(first_step(s, backend, 1))),
+            );
+            g.bench_with_input(
+                BenchmarkId::new(format!("one_subproblem/{backend}"), n),
+                &s,
+                |b, s| b.iter(|| black_box(first_step(s, backend, 50))),
+            );
+        }
         // The first QP of the step: the rows of the pairs a lazy step starts with.
         let settings = InnerSettings::default();
         let eps_qp = s.eps * (1.0 + settings.margin_rel) + settings.margin_abs;
@@ -81,8 +89,40 @@ fn bench(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("ldlt_of_p", n), &qp, |b, qp| {
             b.iter(|| black_box(SparseLdl::factor(&qp.p).expect("P is definite")))
         });
+        let k = p_plus_ata(&qp.p, &qp.a);
+        g.bench_with_input(BenchmarkId::new("ldlt_of_p_plus_rows", n), &k, |b, k| {
+            b.iter(|| black_box(SparseLdl::factor(k).expect("P + AᵀA is definite")))
+        });
     }
     g.finish();
+}
+
+/// The upper triangle of `P + AᵀA` (`P` given by its upper triangle): the pattern of the
+/// Hessian with the contact rows'.
+fn p_plus_ata(p: &CscMatrix, a: &CscMatrix) -> CscMatrix {
+    let mut t: Vec<(usize, usize, f64)> = Vec::new();
+    for j in 0..p.ncols {
+        for k in p.colptr[j]..p.colptr[j + 1] {
+            t.push((p.rowval[k], j, p.nzval[k]));
+        }
+    }
+    // rows of A: (column, value) lists
+    let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); a.nrows];
+    for j in 0..a.ncols {
+        for k in a.colptr[j]..a.colptr[j + 1] {
+            rows[a.rowval[k]].push((j, a.nzval[k]));
+        }
+    }
+    for r in &rows {
+        for &(i, u) in r {
+            for &(j, v) in r {
+                if i <= j {
+                    t.push((i, j, u * v));
+                }
+            }
+        }
+    }
+    CscMatrix::from_triplets(p.nrows, p.ncols, &t).expect("P + AᵀA")
 }
 
 criterion_group!(benches, bench);
