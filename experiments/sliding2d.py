@@ -21,6 +21,8 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 experiments/sliding2d.py                 # results/sliding2d.csv
     python3 experiments/sliding2d.py --levels 1 2    # a subset (written to --out)
+    python3 experiments/sliding2d.py --variants "pantz=--outer-method pantz" \
+        "sqp=--outer-method sqp"                     # the `outer_method` column is the label
 
 `CONTACTLAB_BIN` overrides the binary; `--work DIR` the work directory (default
 runs/sliding2d); `--time-limit S` per run (default 300). Standard library only.
@@ -53,14 +55,14 @@ def rot(p, c, s):
     return (c * p[0] - s * p[1], s * p[0] + c * p[1])
 
 
-def scene(path, level, theta_deg):
+def scene(path, level, theta_deg, bowl_ratio=BOWL_RATIO):
     """Writes the scene file of `level` (k) started at `theta_deg`; returns (h, eps)."""
     k = level
     nx, ny = 8 * k, 4 * k
     h = W / nx
     eps = h / 10
     # the bowl: arc points from -ARC to +ARC, spacing BOWL_RATIO * h
-    nb = max(2, int(math.ceil(2 * ARC * RB / (BOWL_RATIO * h))))
+    nb = max(2, int(math.ceil(2 * ARC * RB / (bowl_ratio * h))))
     bowl = [(RB * math.sin(-ARC + 2 * ARC * i / nb), RB - RB * math.cos(-ARC + 2 * ARC * i / nb))
             for i in range(nb + 1)]
     # the block at the bottom: its bottom edge the chord of half-width W/2, lifted by 2 eps
@@ -86,7 +88,7 @@ def scene(path, level, theta_deg):
               "contact": {"pairs": [["block", "bowl"]], "self": []}}
     bm.write_scene(path, header, [block, bowl_body],
                    COMMENT.format(rb=RB, w=W, hb=HB, nx=nx, ny=ny, h=h, deg=theta_deg,
-                                  ratio=BOWL_RATIO))
+                                  ratio=bowl_ratio))
     return h, eps
 
 
@@ -101,7 +103,7 @@ def block_centroid(out):
     return pts
 
 
-FIELDS = ["level", "h", "eps", "theta0_deg", "slide_over_h", "outer_method", "status",
+FIELDS = ["level", "h", "eps", "bowl_ratio", "theta0_deg", "slide_over_h", "outer_method", "status",
           "outer_iterations", "sqp_steps", "fallback_steps", "inner_iterations", "final_energy",
           "kappa", "residual_hm1", "bound", "ratio", "centroid_x", "centroid_angle_deg",
           "min_distance", "energy_monotone", "all_iterates_admissible", "wall_time_s"]
@@ -116,6 +118,11 @@ def main():
     ap.add_argument("--out", default=os.path.join(bm.ROOT, "results", "sliding2d.csv"))
     ap.add_argument("--time-limit", type=float, default=300.0)
     ap.add_argument("--max-outer", type=int, default=2000)
+    ap.add_argument("--bowl-ratio", type=float, default=BOWL_RATIO,
+                    help="bowl edge length / block edge length (default %(default)s)")
+    ap.add_argument("--variants", nargs="+", default=None,
+                    help="LABEL=FLAGS run variants instead of --methods, e.g. "
+                         "'sqp-curv=--outer-method sqp --sqp-curvature psd'")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
     rows = []
@@ -123,14 +130,15 @@ def main():
         for theta in args.starts:
             tag = "l%d_t%g" % (level, theta)
             path = os.path.join(args.work, "slide2d_%s.toml" % tag)
-            h, eps = scene(path, level, theta)
-            for method in args.methods:
+            h, eps = scene(path, level, theta, args.bowl_ratio)
+            variants = ([v.split("=", 1) for v in args.variants] if args.variants else
+                        [(m, "--outer-method " + m) for m in args.methods])
+            for method, flags in variants:
                 out = os.path.join(args.work, "%s_%s" % (tag, method))
                 t0 = time.time()
-                code, secs, summ = bm.run(path, out, ["--outer-method", method, "--time-limit",
-                                                      str(args.time_limit), "--max-outer",
-                                                      str(args.max_outer), "--frame-every",
-                                                      "1000000"])
+                code, secs, summ = bm.run(path, out, flags.split() + [
+                    "--time-limit", str(args.time_limit), "--max-outer", str(args.max_outer),
+                    "--frame-every", "1000000"])
                 pts = block_centroid(out)
                 nblock = (8 * level + 1) * (4 * level + 1)
                 cx = sum(p[0] for p in pts[:nblock]) / nblock
@@ -138,7 +146,8 @@ def main():
                 diag = summ.get("diagnostics") or {}
                 cert = summ.get("certificate") or {}
                 row = {
-                    "level": level, "h": h, "eps": eps, "theta0_deg": theta,
+                    "level": level, "h": h, "eps": eps, "bowl_ratio": args.bowl_ratio,
+                    "theta0_deg": theta,
                     "slide_over_h": (RB - HB / 2) * abs(math.radians(theta)) / h,
                     "outer_method": method, "status": summ["status"],
                     "outer_iterations": summ["outer_iterations"],
