@@ -47,6 +47,8 @@ pub struct PairHessian {
     /// `∇²d`, row-major, `(nv·dim)²` entries, local index `i·dim + c` (vertex `i`, coordinate
     /// `c`).
     pub h: Vec<f64>,
+    /// `∇d = c ⊗ n` on the same local indices.
+    pub grad: Vec<f64>,
 }
 
 /// `TᵀT` is treated as singular when its smallest Cholesky pivot is below this fraction of its
@@ -187,7 +189,8 @@ pub fn pair_hessian(mesh: &Mesh, x: &[f64], pair: ContactPair) -> Option<PairHes
         match pair {
             ContactPair::PointEdge { x: v, a } => {
                 let ed = mesh.edges[a];
-                let q = point_edge_distance(&Mesh::p2(x, v), &Mesh::p2(x, ed[0]), &Mesh::p2(x, ed[1]));
+                let q =
+                    point_edge_distance(&Mesh::p2(x, v), &Mesh::p2(x, ed[0]), &Mesh::p2(x, ed[1]));
                 (
                     [v, ed[0], ed[1], 0],
                     3,
@@ -197,7 +200,8 @@ pub fn pair_hessian(mesh: &Mesh, x: &[f64], pair: ContactPair) -> Option<PairHes
             }
             ContactPair::PointTriangle { x: v, t } => {
                 let f = mesh.faces[t];
-                let q = point_triangle_distance(&p3(x, v), &p3(x, f[0]), &p3(x, f[1]), &p3(x, f[2]));
+                let q =
+                    point_triangle_distance(&p3(x, v), &p3(x, f[0]), &p3(x, f[1]), &p3(x, f[2]));
                 (
                     [v, f[0], f[1], f[2]],
                     4,
@@ -207,7 +211,8 @@ pub fn pair_hessian(mesh: &Mesh, x: &[f64], pair: ContactPair) -> Option<PairHes
             }
             ContactPair::EdgeEdge { a, b } => {
                 let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
-                let q = edge_edge_distance(&p3(x, ea[0]), &p3(x, ea[1]), &p3(x, eb[0]), &p3(x, eb[1]));
+                let q =
+                    edge_edge_distance(&p3(x, ea[0]), &p3(x, ea[1]), &p3(x, eb[0]), &p3(x, eb[1]));
                 (
                     [ea[0], ea[1], eb[0], eb[1]],
                     4,
@@ -218,12 +223,30 @@ pub fn pair_hessian(mesh: &Mesh, x: &[f64], pair: ContactPair) -> Option<PairHes
         };
     let y: Vec<[f64; 3]> = vertices[..nv].iter().map(|&v| pos(v)).collect();
     let (distance, h) = hessian_of_distance(dim, &y, &near, &far)?;
+    // ∇d = c ⊗ r / d
+    let mut c = [0.0f64; 4];
+    for &(i, w) in &far {
+        c[i] += w;
+    }
+    for &(i, w) in &near {
+        c[i] -= w;
+    }
+    let mut r = [0.0f64; 3];
+    for i in 0..nv {
+        for k in 0..dim {
+            r[k] += c[i] * y[i][k];
+        }
+    }
+    let grad = (0..nv * dim)
+        .map(|p| c[p / dim] * r[p % dim] / distance)
+        .collect();
     Some(PairHessian {
         vertices,
         nv,
         dim,
         distance,
         h,
+        grad,
     })
 }
 
@@ -248,7 +271,9 @@ mod tests {
             Kind::PointTriangle => {
                 point_triangle_distance(&v3(y[0]), &v3(y[1]), &v3(y[2]), &v3(y[3])).distance
             }
-            Kind::EdgeEdge => edge_edge_distance(&v3(y[0]), &v3(y[1]), &v3(y[2]), &v3(y[3])).distance,
+            Kind::EdgeEdge => {
+                edge_edge_distance(&v3(y[0]), &v3(y[1]), &v3(y[2]), &v3(y[3])).distance
+            }
         }
     }
 
@@ -295,10 +320,10 @@ mod tests {
         let mut out = vec![0.0; nd * nd];
         for p in 0..nd {
             for q in 0..nd {
-                out[p * nd + q] = (at(&[(p, h), (q, h)]) - at(&[(p, h), (q, -h)])
-                    - at(&[(p, -h), (q, h)])
-                    + at(&[(p, -h), (q, -h)]))
-                    / (4.0 * h * h);
+                out[p * nd + q] =
+                    (at(&[(p, h), (q, h)]) - at(&[(p, h), (q, -h)]) - at(&[(p, -h), (q, h)])
+                        + at(&[(p, -h), (q, -h)]))
+                        / (4.0 * h * h);
             }
         }
         out
@@ -312,7 +337,10 @@ mod tests {
             _ => 3,
         };
         let (d, h) = analytic(kind, y).unwrap_or_else(|| panic!("{what}: no Hessian"));
-        assert!((d - dist(kind, y)).abs() <= 1e-14 * d.max(1.0), "{what}: distance");
+        assert!(
+            (d - dist(kind, y)).abs() <= 1e-14 * d.max(1.0),
+            "{what}: distance"
+        );
         // the step: small against the distance and the distance to a face boundary
         let step = 1e-5 * d.min(1.0);
         let fd = fd_hessian(kind, dim, y, step);
@@ -393,7 +421,11 @@ mod tests {
         check(Kind::PointTriangle, &with([-0.5, -0.4, 0.1]), "vertex t0");
         check(Kind::PointTriangle, &with([1.6, 0.0, 0.5]), "vertex t1");
         // nearly degenerate: very close to the face (1e-3 of its size)
-        check(Kind::PointTriangle, &with([0.3, 0.3, 0.06 + 1e-3]), "close to the face");
+        check(
+            Kind::PointTriangle,
+            &with([0.3, 0.3, 0.06 + 1e-3]),
+            "close to the face",
+        );
         // a thin (but not degenerate) triangle
         let thin = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1e-2, 0.0]];
         check(
@@ -407,10 +439,26 @@ mod tests {
     fn edge_edge_interior_end_and_ends() {
         let a = [[0.0, 0.0, 0.0], [1.0, 0.2, 0.1]];
         let ee = |b0: [f64; 3], b1: [f64; 3]| [a[0], a[1], b0, b1];
-        check(Kind::EdgeEdge, &ee([0.5, -0.5, 0.6], [0.4, 0.8, 0.5]), "interior");
-        check(Kind::EdgeEdge, &ee([1.5, -0.5, 0.6], [1.4, 0.8, 0.5]), "s = 1, t interior");
-        check(Kind::EdgeEdge, &ee([-0.4, -0.5, 0.6], [-1.4, -1.8, 0.5]), "ends");
-        check(Kind::EdgeEdge, &ee([0.5, 0.5, 0.6], [0.5, 1.5, 0.9]), "t = 0, s interior");
+        check(
+            Kind::EdgeEdge,
+            &ee([0.5, -0.5, 0.6], [0.4, 0.8, 0.5]),
+            "interior",
+        );
+        check(
+            Kind::EdgeEdge,
+            &ee([1.5, -0.5, 0.6], [1.4, 0.8, 0.5]),
+            "s = 1, t interior",
+        );
+        check(
+            Kind::EdgeEdge,
+            &ee([-0.4, -0.5, 0.6], [-1.4, -1.8, 0.5]),
+            "ends",
+        );
+        check(
+            Kind::EdgeEdge,
+            &ee([0.5, 0.5, 0.6], [0.5, 1.5, 0.9]),
+            "t = 0, s interior",
+        );
         // nearly parallel (sin of the angle 1e-3)
         check(
             Kind::EdgeEdge,
@@ -424,7 +472,9 @@ mod tests {
         // deterministic pseudo-random points (an LCG), every kind, whatever face is closest
         let mut s: u64 = 0x9e3779b97f4a7c15;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         let mut checked = 0;

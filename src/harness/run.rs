@@ -24,7 +24,7 @@ use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
@@ -93,6 +93,11 @@ pub struct RunArgs {
     /// fallback). docs/method.md, "The SQP outer method".
     #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
     pub outer_method: OuterMethod,
+    /// With --outer-method sqp: the constraints' curvature −Σ μ_k ∇²d_k in the QP's Hessian:
+    /// off, psd (each pair's block projected to its PSD part) or full (the model's shift keeps
+    /// it convex). docs/method.md, "The SQP outer method".
+    #[arg(long, default_value_t = Curvature::default().as_str().to_string(), value_parser = parse_curvature)]
+    pub sqp_curvature: String,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -157,6 +162,12 @@ fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
             "--newton-model {s:?}: expected one of shifted, projected"
         )),
     }
+}
+
+fn parse_curvature(s: &str) -> Result<String, String> {
+    Curvature::from_name(s)
+        .map(|c| c.as_str().to_string())
+        .ok_or_else(|| format!("--sqp-curvature {s:?}: expected one of off, psd, full, tangent"))
 }
 
 fn parse_outer_method(s: &str) -> Result<OuterMethod, String> {
@@ -321,6 +332,7 @@ impl RunArgs {
             time_limit_s: self.time_limit,
             hessian_model: self.newton_model,
             outer_method: self.outer_method,
+            sqp_curvature: Curvature::from_name(&self.sqp_curvature).unwrap_or_default(),
         }
     }
 }
