@@ -121,7 +121,7 @@ pub fn hessian_of_distance(
             let gab: f64 = (0..dim).map(|k| t[a][k] * t[b][k]).sum();
             let s = gab - (0..b).map(|q| l[a][q] * l[b][q]).sum::<f64>();
             if a == b {
-                if !(s > SINGULAR * gab) {
+                if s.is_nan() || s <= SINGULAR * gab {
                     return None;
                 }
                 l[a][a] = s.sqrt();
@@ -159,13 +159,13 @@ pub fn hessian_of_distance(
             let p = i * dim + k;
             let gp = c[i] * r[k];
             for j in 0..nv {
-                for kk in 0..dim {
+                for (kk, &rkk) in r.iter().enumerate().take(dim) {
                     let q = j * dim + kk;
                     let mut hphi = if k == kk { c[i] * c[j] } else { 0.0 };
                     for row in &lm {
                         hphi -= row[p] * row[q];
                     }
-                    h[p * nd + q] = hphi * d1 - gp * c[j] * r[kk] * d3;
+                    h[p * nd + q] = hphi * d1 - gp * c[j] * rkk * d3;
                 }
             }
         }
@@ -185,42 +185,40 @@ pub fn pair_hessian(mesh: &Mesh, x: &[f64], pair: ContactPair) -> Option<PairHes
             [p.x, p.y, p.z]
         }
     };
-    let (vertices, nv, near, far): ([usize; 4], usize, Vec<(usize, f64)>, Vec<(usize, f64)>) =
-        match pair {
-            ContactPair::PointEdge { x: v, a } => {
-                let ed = mesh.edges[a];
-                let q =
-                    point_edge_distance(&Mesh::p2(x, v), &Mesh::p2(x, ed[0]), &Mesh::p2(x, ed[1]));
-                (
-                    [v, ed[0], ed[1], 0],
-                    3,
-                    vec![(0, 1.0)],
-                    vec![(1, q.alpha[0]), (2, q.alpha[1])],
-                )
-            }
-            ContactPair::PointTriangle { x: v, t } => {
-                let f = mesh.faces[t];
-                let q =
-                    point_triangle_distance(&p3(x, v), &p3(x, f[0]), &p3(x, f[1]), &p3(x, f[2]));
-                (
-                    [v, f[0], f[1], f[2]],
-                    4,
-                    vec![(0, 1.0)],
-                    vec![(1, q.beta[0]), (2, q.beta[1]), (3, q.beta[2])],
-                )
-            }
-            ContactPair::EdgeEdge { a, b } => {
-                let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
-                let q =
-                    edge_edge_distance(&p3(x, ea[0]), &p3(x, ea[1]), &p3(x, eb[0]), &p3(x, eb[1]));
-                (
-                    [ea[0], ea[1], eb[0], eb[1]],
-                    4,
-                    vec![(0, 1.0 - q.s), (1, q.s)],
-                    vec![(2, 1.0 - q.t), (3, q.t)],
-                )
-            }
-        };
+    // (vertices, their number, the near side's and the far side's weights)
+    type Parts = ([usize; 4], usize, Vec<(usize, f64)>, Vec<(usize, f64)>);
+    let (vertices, nv, near, far): Parts = match pair {
+        ContactPair::PointEdge { x: v, a } => {
+            let ed = mesh.edges[a];
+            let q = point_edge_distance(&Mesh::p2(x, v), &Mesh::p2(x, ed[0]), &Mesh::p2(x, ed[1]));
+            (
+                [v, ed[0], ed[1], 0],
+                3,
+                vec![(0, 1.0)],
+                vec![(1, q.alpha[0]), (2, q.alpha[1])],
+            )
+        }
+        ContactPair::PointTriangle { x: v, t } => {
+            let f = mesh.faces[t];
+            let q = point_triangle_distance(&p3(x, v), &p3(x, f[0]), &p3(x, f[1]), &p3(x, f[2]));
+            (
+                [v, f[0], f[1], f[2]],
+                4,
+                vec![(0, 1.0)],
+                vec![(1, q.beta[0]), (2, q.beta[1]), (3, q.beta[2])],
+            )
+        }
+        ContactPair::EdgeEdge { a, b } => {
+            let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
+            let q = edge_edge_distance(&p3(x, ea[0]), &p3(x, ea[1]), &p3(x, eb[0]), &p3(x, eb[1]));
+            (
+                [ea[0], ea[1], eb[0], eb[1]],
+                4,
+                vec![(0, 1.0 - q.s), (1, q.s)],
+                vec![(2, 1.0 - q.t), (3, q.t)],
+            )
+        }
+    };
     let y: Vec<[f64; 3]> = vertices[..nv].iter().map(|&v| pos(v)).collect();
     let (distance, h) = hessian_of_distance(dim, &y, &near, &far)?;
     // ∇d = c ⊗ r / d

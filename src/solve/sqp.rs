@@ -375,7 +375,7 @@ pub(crate) fn curvature_triplets(
         .filter(|(_, &m)| m > 0.0 && m.is_finite())
         .map(|(p, &m)| (*p, m))
         .collect();
-    pairs.sort_by(|a, b| a.0.cmp(&b.0));
+    pairs.sort_by_key(|a| a.0);
     let dim = mesh.dim;
     let mut trip = Vec::new();
     for (pair, m) in pairs {
