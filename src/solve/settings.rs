@@ -130,6 +130,8 @@ pub struct RunSettings {
     pub outer_method: OuterMethod,
     /// The SQP model's constraint curvature (`--sqp-curvature`; sqp only).
     pub sqp_curvature: Curvature,
+    /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`).
+    pub sqp_normal_stiffness: f64,
 }
 
 impl Default for RunSettings {
@@ -150,6 +152,7 @@ impl Default for RunSettings {
             hessian_model: outer.inner.hessian_model,
             outer_method: outer.method,
             sqp_curvature: outer.sqp.curvature,
+            sqp_normal_stiffness: outer.sqp.normal_stiffness,
         }
     }
 }
@@ -272,6 +275,7 @@ impl RunSettings {
         settings.inner.hessian_model = self.hessian_model;
         settings.method = self.outer_method;
         settings.sqp.curvature = self.sqp_curvature;
+        settings.sqp.normal_stiffness = self.sqp_normal_stiffness;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

@@ -119,6 +119,9 @@ pub struct SqpSettings {
     /// The constraints' curvature `−Σ μ_k ∇²d_k` in the QP's Hessian (μ_k the last step's
     /// multipliers) and how it is kept convex ([`Curvature`]).
     pub curvature: Curvature,
+    /// `γ`: the model gets `γ·max diag(H)·∇d_k∇d_kᵀ` for each pair with a positive multiplier
+    /// at the last step (0: none).
+    pub normal_stiffness: f64,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -137,6 +140,9 @@ pub enum Curvature {
     /// The blocks as they are; the model's adaptive shift ([`ModelShift`]) then makes the
     /// whole `P` definite (the shift is set by the most negative mode).
     Full,
+    /// `full` for the pairs whose closest points are inside both elements only (no vertex or
+    /// edge case, whose curvature `μ/d` with `d ≈ ε` is the largest).
+    Interior,
     /// Each pair's block restricted to the tangent space of its own constraint,
     /// `(I − ĝĝᵀ)(−μ_k ∇²d_k)(I − ĝĝᵀ)` (`ĝ` the unit gradient of `d_k` on the pair's free
     /// dofs), then projected to its PSD part: along an active row the QP's step depends on the
@@ -147,11 +153,12 @@ pub enum Curvature {
 
 impl Curvature {
     /// Every mode.
-    pub const ALL: [Curvature; 4] = [
+    pub const ALL: [Curvature; 5] = [
         Curvature::Off,
         Curvature::Psd,
         Curvature::Full,
         Curvature::Tangent,
+        Curvature::Interior,
     ];
 
     /// The name on the command line and in JSON.
@@ -161,6 +168,7 @@ impl Curvature {
             Curvature::Psd => "psd",
             Curvature::Full => "full",
             Curvature::Tangent => "tangent",
+            Curvature::Interior => "interior",
         }
     }
 
@@ -177,6 +185,7 @@ impl Default for SqpSettings {
             max_halvings: 30,
             corrections: 3,
             curvature: Curvature::default(),
+            normal_stiffness: 0.0,
         }
     }
 }
@@ -379,6 +388,12 @@ pub(crate) fn curvature_triplets(
     let dim = mesh.dim;
     let mut trip = Vec::new();
     for (pair, m) in pairs {
+        if mode == Curvature::Interior {
+            match pair_rows(mesh, x, pair) {
+                Some(r) if r.weight[..r.len].iter().all(|w| *w > 0.0) => {}
+                _ => continue,
+            }
+        }
         let Some(ph) = pair_hessian(mesh, x, pair) else {
             continue;
         };
@@ -421,6 +436,46 @@ pub(crate) fn curvature_triplets(
                 if v != 0.0 {
                     trip.push((da, db, v));
                 }
+            }
+        }
+    }
+    trip
+}
+
+/// `γ ∇d_k ∇d_kᵀ` on dofs (both triangles) for the pairs of `mu` with `μ_k > 0`.
+pub(crate) fn normal_triplets(
+    mesh: &Mesh,
+    x: &[f64],
+    col: &[usize],
+    mu: &HashMap<ContactPair, f64>,
+    gamma: f64,
+) -> Vec<(usize, usize, f64)> {
+    if !gamma.is_finite() || gamma <= 0.0 {
+        return Vec::new();
+    }
+    let mut pairs: Vec<ContactPair> = mu
+        .iter()
+        .filter(|(_, &m)| m > 0.0)
+        .map(|(p, _)| *p)
+        .collect();
+    pairs.sort();
+    let dim = mesh.dim;
+    let mut trip = Vec::new();
+    for pair in pairs {
+        let Some(r) = pair_rows(mesh, x, pair) else {
+            continue;
+        };
+        let mut g: Vec<(usize, f64)> = Vec::new();
+        for i in 0..r.len {
+            for c in 0..dim {
+                g.push((dim * r.plus[i] + c, r.weight[i] * r.n[c]));
+                g.push((dim * r.minus[i] + c, -r.weight[i] * r.n[c]));
+            }
+        }
+        g.retain(|(d, _)| col[*d] != usize::MAX);
+        for &(a, va) in &g {
+            for &(b, vb) in &g {
+                trip.push((a, b, gamma * va * vb));
             }
         }
     }
@@ -471,7 +526,8 @@ pub(crate) fn sqp_step(
         inner,
         shift,
         &curvature,
-        ctx.sqp.curvature == Curvature::Full && !curvature.is_empty(),
+        matches!(ctx.sqp.curvature, Curvature::Full | Curvature::Interior) && !curvature.is_empty(),
+        &normal_triplets(mesh, x, col, warm, ctx.sqp.normal_stiffness),
     )?;
     out.t_assembly_s += ta.elapsed().as_secs_f64();
     // The QP over the carried rows; solved again with the rows its solution violates.
@@ -776,7 +832,12 @@ mod tests {
             (records.len() - 1, status, kappa, j)
         };
         let (steps_off, _, _, j_off) = run(Curvature::Off);
-        for c in [Curvature::Psd, Curvature::Full, Curvature::Tangent] {
+        for c in [
+            Curvature::Psd,
+            Curvature::Full,
+            Curvature::Tangent,
+            Curvature::Interior,
+        ] {
             let (steps, status, kappa, j) = run(c);
             eprintln!(
                 "{}: {steps} steps ({status:?}, kappa {kappa:e}, J {j}); off: {steps_off}",

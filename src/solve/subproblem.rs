@@ -290,6 +290,7 @@ pub fn build_qp(
         shift,
         &[],
         false,
+        &[],
     )
 }
 
@@ -309,6 +310,7 @@ pub fn build_qp_with(
     shift: &mut ModelShift,
     extra: &[(usize, usize, f64)],
     indefinite: bool,
+    normal: &[(usize, usize, f64)],
 ) -> Result<(Qp, Vec<f64>), QpError> {
     let g = energy.gradient(y);
     let mut h = energy.hessian(y, settings.hessian_model);
@@ -327,6 +329,13 @@ pub fn build_qp_with(
             maxdiag = maxdiag.max(v);
         }
         ptrip.push((ci, cj, v));
+    }
+    for &(i, j, v) in normal {
+        let (ci, cj) = (dofs.col[i], dofs.col[j]);
+        if ci == usize::MAX || cj == usize::MAX || ci > cj {
+            continue;
+        }
+        ptrip.push((ci, cj, v * maxdiag));
     }
     let rho = settings.rho_abs.max(settings.rho_rel * maxdiag);
     for c in 0..nf {
