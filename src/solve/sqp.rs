@@ -819,8 +819,8 @@ mod tests {
 
     /// Every curvature mode on the asymmetric balloons n = 8: admissible iterates and J
     /// non-increasing (`sqp_run` checks both), the same minimum as without curvature, and the
-    /// measured ranking: no mode takes fewer outer steps than `off` (docs/method.md, "The SQP
-    /// outer method": the curvature did not shorten the runs; this fails if that changes).
+    /// measured ranking: `interior` takes fewer outer steps than `off` here, the other modes no
+    /// fewer (docs/method.md, "The constraints' curvature (measured)").
     #[test]
     fn curvature_modes_reach_the_same_minimum() {
         let run = |c: Curvature| {
@@ -848,11 +848,16 @@ mod tests {
                 "{}: J {j} against {j_off}",
                 c.as_str()
             );
-            assert!(
-                steps >= steps_off,
-                "{}: {steps} < {steps_off} steps",
-                c.as_str()
-            );
+            // measured: interior 34 steps, off 43, psd and tangent 54, full 85
+            if c == Curvature::Interior {
+                assert!(steps < steps_off, "interior: {steps} ≥ {steps_off} steps");
+            } else {
+                assert!(
+                    steps >= steps_off,
+                    "{}: {steps} < {steps_off} steps",
+                    c.as_str()
+                );
+            }
         }
     }
 
