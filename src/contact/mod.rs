@@ -30,6 +30,7 @@ pub mod bvh;
 pub mod continuous;
 pub mod distance;
 pub mod edge_edge;
+pub mod hessian;
 pub mod motion;
 pub mod point_edge;
 pub mod point_triangle;

@@ -25,7 +25,7 @@ use crate::solve::certificate::Certificate;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
 use crate::solve::settings::{Accuracy, RunSettings};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{anyhow, bail, Result};
 use contactlab_solvers::{backend_from_name, QpError};
 use std::path::PathBuf;
@@ -94,6 +94,16 @@ pub struct RunArgs {
     /// fallback). docs/method.md, "The SQP outer method".
     #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
     pub outer_method: OuterMethod,
+    /// With --outer-method sqp: the constraints' curvature −Σ μ_k ∇²d_k in the QP's Hessian:
+    /// off, psd (each pair's block projected to its PSD part), full (the model's shift keeps
+    /// it convex), tangent (each block on its pair's tangent space, then projected) or interior
+    /// (full, for the pairs whose closest points are inside both elements only). docs/method.md, "The SQP outer method".
+    #[arg(long, default_value_t = Curvature::default().as_str().to_string(), value_parser = parse_curvature)]
+    pub sqp_curvature: String,
+    /// With --outer-method sqp: γ ≥ 0, the model gets γ·max diag(H)·∇d∇dᵀ for each pair with a
+    /// positive multiplier at the last step (0: none). docs/method.md, "The SQP outer method".
+    #[arg(long, default_value_t = 0.0, value_parser = parse_normal_stiffness)]
+    pub sqp_normal_stiffness: f64,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -166,6 +176,23 @@ fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
             "--newton-model {s:?}: expected one of shifted, projected"
         )),
     }
+}
+
+fn parse_normal_stiffness(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "--sqp-normal-stiffness {s:?}: expected a finite number ≥ 0"
+        )),
+    }
+}
+
+fn parse_curvature(s: &str) -> Result<String, String> {
+    Curvature::from_name(s)
+        .map(|c| c.as_str().to_string())
+        .ok_or_else(|| {
+            format!("--sqp-curvature {s:?}: expected one of off, psd, full, tangent, interior")
+        })
 }
 
 fn parse_outer_method(s: &str) -> Result<OuterMethod, String> {
@@ -330,6 +357,8 @@ impl RunArgs {
             time_limit_s: self.time_limit,
             hessian_model: self.newton_model,
             outer_method: self.outer_method,
+            sqp_curvature: Curvature::from_name(&self.sqp_curvature).unwrap_or_default(),
+            sqp_normal_stiffness: self.sqp_normal_stiffness,
         }
     }
 }

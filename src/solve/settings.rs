@@ -22,7 +22,7 @@
 
 use crate::energy::HessianModel;
 use crate::solve::outer::{OuterSettings, Pruning, TrustSettings};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use contactlab_solvers::{default_settings, preset_tolerances, QpSettings, BACKEND_NAMES};
 use thiserror::Error;
 
@@ -128,6 +128,10 @@ pub struct RunSettings {
     pub hessian_model: HessianModel,
     /// The outer method: `pantz` (the paper's T(ψ) steps) or `sqp`.
     pub outer_method: OuterMethod,
+    /// The SQP model's constraint curvature (`--sqp-curvature`; sqp only).
+    pub sqp_curvature: Curvature,
+    /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`).
+    pub sqp_normal_stiffness: f64,
 }
 
 impl Default for RunSettings {
@@ -147,6 +151,8 @@ impl Default for RunSettings {
             time_limit_s: outer.time_limit_s,
             hessian_model: outer.inner.hessian_model,
             outer_method: outer.method,
+            sqp_curvature: outer.sqp.curvature,
+            sqp_normal_stiffness: outer.sqp.normal_stiffness,
         }
     }
 }
@@ -268,6 +274,8 @@ impl RunSettings {
         settings.inner.warm_start = self.warm_start;
         settings.inner.hessian_model = self.hessian_model;
         settings.method = self.outer_method;
+        settings.sqp.curvature = self.sqp_curvature;
+        settings.sqp.normal_stiffness = self.sqp_normal_stiffness;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

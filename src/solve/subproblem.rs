@@ -278,8 +278,43 @@ pub fn build_qp(
     settings: &InnerSettings,
     shift: &mut ModelShift,
 ) -> Result<(Qp, Vec<f64>), QpError> {
+    build_qp_with(
+        mesh,
+        energy,
+        dofs,
+        rows,
+        y,
+        eps_qp,
+        trust,
+        settings,
+        shift,
+        &[],
+        false,
+        &[],
+    )
+}
+
+/// [`build_qp`] with `extra`, symmetric triplets on dofs (both triangles) added to the model
+/// Hessian before the shift (the SQP model's constraint curvature), and `indefinite`: `extra`
+/// may make the model indefinite, so the shift is applied even where J's model is PSD.
+#[allow(clippy::too_many_arguments)]
+pub fn build_qp_with(
+    mesh: &Mesh,
+    energy: &dyn Objective,
+    dofs: &DofMap,
+    rows: &[PairRows],
+    y: &[f64],
+    eps_qp: f64,
+    trust: Option<TrustBox>,
+    settings: &InnerSettings,
+    shift: &mut ModelShift,
+    extra: &[(usize, usize, f64)],
+    indefinite: bool,
+    normal: &[(usize, usize, f64)],
+) -> Result<(Qp, Vec<f64>), QpError> {
     let g = energy.gradient(y);
-    let h = energy.hessian(y, settings.hessian_model);
+    let mut h = energy.hessian(y, settings.hessian_model);
+    h.triplets.extend_from_slice(extra);
     let nf = dofs.nfree;
     let naux = h.rank_one.len();
     let n = nf + naux;
@@ -295,6 +330,13 @@ pub fn build_qp(
         }
         ptrip.push((ci, cj, v));
     }
+    for &(i, j, v) in normal {
+        let (ci, cj) = (dofs.col[i], dofs.col[j]);
+        if ci == usize::MAX || cj == usize::MAX || ci > cj {
+            continue;
+        }
+        ptrip.push((ci, cj, v * maxdiag));
+    }
     let rho = settings.rho_abs.max(settings.rho_rel * maxdiag);
     for c in 0..nf {
         ptrip.push((c, c, rho));
@@ -303,7 +345,7 @@ pub fn build_qp(
         ptrip.push((nf + k, nf + k, r.coef));
     }
     let mut p = CscMatrix::from_triplets(n, n, &ptrip)?;
-    if !energy.model_is_psd(settings.hessian_model) {
+    if indefinite || !energy.model_is_psd(settings.hessian_model) {
         let sigma = shift.apply(&mut p, nf, maxdiag)?;
         if sigma > 0.0 {
             for (k, r) in h.rank_one.iter().enumerate() {
