@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# results/restart.csv: does a run return to its end state's energy when started from a
+# perturbed copy of that state? The asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) and the
+# symmetric ones, both outer methods, n = 40 80 160: one run from the scene's start, then runs
+# from its final.vtu perturbed by A·h (`--start-from … --start-perturb A`, A = 0.01 and 0.1;
+# the vertices of pairs that would come closer than ε keep their positions).
+#
+# Usage: bash experiments/restart.sh [N ...]   (default 40 80 160). Environment:
+# CONTACTLAB_BIN (default target/release/contactlab), OUT (default results/restart.csv).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${CONTACTLAB_BIN:-target/release/contactlab}
+out=${OUT:-results/restart.csv}
+sizes=${*:-40 80 160}
+work=runs/restart
+mkdir -p "$work"
+for n in $sizes; do
+  for start in asym sym; do
+    h=(); [ "$start" = asym ] && h=(--heights 0.9,0.2,0.9,0.2)
+    for m in pantz sqp; do
+      base=$work/$start-$m-$n
+      echo "$start n=$n $m" >&2
+      "$bin" run balloons --n "$n" "${h[@]}" --outer-method "$m" --quiet --frame-every 1000000 \
+        --out "$base" >/dev/null 2>&1 || true
+      for a in 0.01 0.1; do
+        "$bin" run balloons --n "$n" "${h[@]}" --outer-method "$m" --quiet --frame-every 1000000 \
+          --start-from "$base/final.vtu" --start-perturb "$a" --out "$base-restart$a" >/dev/null 2>&1 || true
+      done
+    done
+  done
+done
+python3 - "$out" "$work" "$sizes" <<'PY'
+import csv, json, sys
+out, work, sizes = sys.argv[1], sys.argv[2], sys.argv[3].split()
+cols = ["start", "n", "outer_method", "perturb", "perturb_used", "unperturbed_vertices", "status",
+        "outer_iterations", "initial_energy", "final_energy", "kappa", "state",
+        "energy_minus_first_run"]
+rows = []
+for n in sizes:
+    for start in ["asym", "sym"]:
+        for m in ["pantz", "sqp"]:
+            base = f"{work}/{start}-{m}-{n}"
+            s0 = json.load(open(f"{base}/summary.json"))
+            for a, d in [("", base), ("0.01", base + "-restart0.01"), ("0.1", base + "-restart0.1")]:
+                s = json.load(open(f"{d}/summary.json"))
+                p = s["params"]
+                rows.append({
+                    "start": start, "n": n, "outer_method": m, "perturb": a,
+                    "perturb_used": p.get("start_perturb", ""),
+                    "unperturbed_vertices": p.get("start_unperturbed_vertices", ""),
+                    "status": s["status"], "outer_iterations": s["outer_iterations"],
+                    "initial_energy": repr(s["initial_energy"]), "final_energy": repr(s["final_energy"]),
+                    "kappa": s["certificate"]["kappa"], "state": s["state"],
+                    "energy_minus_first_run": s["final_energy"] - s0["final_energy"],
+                })
+with open(out, "w", newline="") as fh:
+    w = csv.DictWriter(fh, fieldnames=cols, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+print(f"{out}: {len(rows)} rows", file=sys.stderr)
+PY
