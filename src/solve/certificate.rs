@@ -50,6 +50,15 @@
 //! product) whose cosine exceeds `1e-10`, up to round-off; the reported residual is then
 //! recomputed from the multipliers, so it is an upper bound of the minimum attained by
 //! non-negative multipliers.
+//!
+//! That method forms `Q` on the passive set densely and costs like its cube: from
+//! [`QP_PATH_MIN_GENERATORS`] distinct generators on, the problem is solved by its dual, a
+//! sparse QP in the backends' standard form ([`nnls_dual_qp`]: `min ½wᵀGw − J'ᵀw` s.t.
+//! `Bᵀw ≤ 0`, whose row multipliers are μ), by the registry's [`CERTIFICATE_BACKEND`] at
+//! [`CERTIFICATE_TOL`], with refinement rounds; nothing `k × k` is formed. Its residual too is
+//! recomputed from the multipliers clipped to `≥ 0`, so it is an upper bound of the minimum
+//! whatever the backend returned. `dual_gap` reports, for either path, how far the residual
+//! can be above the minimum by weak duality.
 
 use crate::contact::distance::edge_edge_distance;
 use crate::contact::{near_pairs, p3, pair_rows, ContactPair};
@@ -116,7 +125,8 @@ pub struct Certificate {
     pub pairs: usize,
     /// Constraint gradients (the pairs', and the endpoint distances of parallel edges).
     pub generators: usize,
-    /// Generators with a positive multiplier.
+    /// Generators with a positive multiplier (`qp`: an interior point's, all of them where
+    /// every generator is nearly active).
     pub positive: usize,
     /// The distance tolerance: pairs with `d_k ≤ ε + active_tol` count.
     pub active_tol: f64,
@@ -679,7 +689,7 @@ pub(crate) fn nnls_dual_qp(
             let mut l: Vec<f64> = r.iter().map(|v| v / s0).collect();
             let mut u = l.clone();
             l.extend(mu.iter().zip(&rscale).map(|(&mk, &c)| -mk / (c * s0)));
-            u.extend(std::iter::repeat(f64::INFINITY).take(m));
+            u.extend(std::iter::repeat_n(f64::INFINITY, m));
             let qp = Qp {
                 p: p.clone(),
                 q: vec![0.0; n + m],
@@ -703,7 +713,8 @@ pub(crate) fn nnls_dual_qp(
                 })
                 .collect();
             let (rc, rnc) = residual_of(&cand);
-            if !(rnc < residual) {
+            // (a NaN residual is not lower either)
+            if rnc.partial_cmp(&residual) != Some(std::cmp::Ordering::Less) {
                 break;
             }
             let halved = rnc <= 0.5 * residual;
