@@ -545,7 +545,7 @@ pub(crate) struct Nnls {
 /// of the backends:
 ///
 /// ```text
-///     ½‖g − Bμ‖²_{G⁻¹} = ½ min_{μ ≥ 0} max_w 2wᵀ(g − Bμ) − wᵀGw
+///     ½‖r‖²_{G⁻¹} = max_w wᵀr − ½wᵀGw,
 ///     min_{μ ≥ 0} ½‖g − Bμ‖²_{G⁻¹} = max_{Bᵀw ≤ 0} gᵀw − ½wᵀGw
 /// ```
 ///
@@ -554,7 +554,9 @@ pub(crate) struct Nnls {
 /// `Bᵀw ≤ 0` has the NNLS multipliers as its row multipliers and `w* = G⁻¹(g − Bμ*)`. It is
 /// solved in units where `‖g‖_∞ = 1` and with each row `b_j` divided by its Euclidean norm
 /// (the backends' tolerances are absolute, or relative to `max(1, ·)`), by the registered
-/// backend `backend` at `tol`. Nothing `k × k` is formed: the QP holds `G` and `B`.
+/// backend `backend` at `tol`, then refined by at most [`REFINE_ROUNDS`] rounds (in the
+/// body: the first QP's residual is accurate to about `√tol·‖g‖` only). Nothing `k × k` is
+/// formed: the QPs hold `G` and `B`.
 ///
 /// The multipliers are then clipped to `≥ 0` (a NaN to 0), and the residual is recomputed
 /// from them with the factor of `G`: whatever the backend returned, it is the residual of
