@@ -10,10 +10,12 @@ use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::mesh::{Body, BodyKind, Mesh};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::Scene;
-use contactlab::solve::certificate::{certificate, Certificate};
+use contactlab::solve::certificate::{certificate, certificate_with, Certificate, CertificatePath};
 use contactlab::solve::h1::H1Norms;
 use contactlab::solve::outer::{certificate_active_tol, run, OuterSettings, RunResult, RunStatus};
-use contactlab_solvers::{backend_from_name, default_settings};
+use contactlab_solvers::{
+    backend_from_name, default_settings, CERTIFICATE_BACKEND, CERTIFICATE_TOL,
+};
 use std::collections::HashMap;
 
 fn solve(
@@ -400,4 +402,70 @@ fn certificate_warm_start_changes_only_the_work() {
         (cold.residual - hot.residual).abs() <= 1e-9 * cold.scale,
         "{cold:?} {hot:?}"
     );
+}
+
+#[test]
+fn certificate_paths_agree_on_real_states() {
+    // The exact active set and the sparse dual QP (docs/method.md, "The minimality
+    // certificate") on final states of built-in scenes. At a fixed point above the minimum
+    // (κ of 1e-3 and more) both reach the minimum: measured within 5e-12 of S of each other
+    // (`examples/cert_paths.rs`), asserted within 1e-9, and the QP's weak-duality gap is
+    // small. At a minimum κ is at the noise floor of the least-squares problem (about 1e-8
+    // on the balloons): both residuals are upper bounds at that floor, measured within
+    // 3e-8 of S of each other up to n = 1600, asserted within 1e-7 (tol_κ is 1e-5).
+    let settings = OuterSettings::default();
+    let mut states: Vec<(String, Scene, RunResult)> = Vec::new();
+    for (name, heights) in [
+        ("symmetric", [0.2; 4]),
+        ("asymmetric", [0.9, 0.2, 0.9, 0.2]),
+    ] {
+        let (scene, res) = balloons(40, heights);
+        states.push((format!("balloons {name}"), scene, res));
+    }
+    for name in ["solids", "ring"] {
+        let scene = contactlab::scene::registry::build_scene(
+            name,
+            contactlab::scene::registry::default_n(name),
+            None,
+            &Default::default(),
+        )
+        .unwrap();
+        let (res, _) = solve(&scene.mesh, &scene.energy, scene.eps, &scene.x0, &settings);
+        states.push((name.to_string(), scene, res));
+    }
+    for (name, scene, res) in &states {
+        let norms = H1Norms::scaled(&scene.mesh).unwrap();
+        let tol = certificate_active_tol(&settings, scene.eps, norms.free.ell);
+        let cert = |path| {
+            certificate_with(
+                &scene.mesh,
+                &scene.energy,
+                &res.x,
+                scene.eps,
+                tol,
+                &norms,
+                &HashMap::new(),
+                path,
+            )
+            .unwrap()
+        };
+        let exact = cert(CertificatePath::ActiveSet);
+        let qp = cert(CertificatePath::Qp {
+            backend: CERTIFICATE_BACKEND,
+            tol: CERTIFICATE_TOL,
+        });
+        assert!(exact.generators > 0, "{name}");
+        assert_eq!((exact.unresolved, qp.unresolved), (0, 0), "{name}");
+        assert_eq!(qp.method, "qp");
+        let diff = (qp.kappa - exact.kappa).abs();
+        if exact.kappa >= 1e-3 {
+            assert!(diff <= 1e-9, "{name}: {exact:?} {qp:?}");
+            assert!(qp.dual_gap <= 1e-8, "{name}: {qp:?}");
+        } else {
+            assert!(diff <= 1e-7, "{name}: {exact:?} {qp:?}");
+        }
+    }
+    // the scenes cover both kinds of state
+    assert!(states.iter().any(|s| s.2.certificate.kappa >= 1e-3));
+    assert!(states.iter().any(|s| s.2.certificate.kappa <= 1e-6));
 }

@@ -41,5 +41,5 @@ pub use qp::{CscMatrix, Qp};
 pub use qps::{read_qps, read_qps_file, write_qps, write_qps_file, QpsError};
 pub use registry::{
     backend_from_name, default_settings, preset_tolerances, PresetTolerances, BACKEND_NAMES,
-    DEFAULT_BACKEND,
+    CERTIFICATE_BACKEND, CERTIFICATE_TOL, DEFAULT_BACKEND,
 };

@@ -129,6 +129,14 @@ pub const BACKENDS: [Backend; 5] = [
 /// reference solves (the core takes it from here and never names a backend itself).
 pub const DEFAULT_BACKEND: &str = BACKENDS[0].name;
 
+/// The backend of the minimality certificate's sparse path (the dual QP of its non-negative
+/// least-squares problem, `contactlab::solve::certificate`), and its tolerance
+/// (`eps_abs = eps_rel`). Chosen by measurement on the balloons' final states (docs/method.md,
+/// "The minimality certificate").
+pub const CERTIFICATE_BACKEND: &str = BACKENDS[0].name;
+/// See [`CERTIFICATE_BACKEND`].
+pub const CERTIFICATE_TOL: f64 = 1e-10;
+
 /// The names of [`BACKENDS`], in order.
 pub const BACKEND_NAMES: [&str; BACKENDS.len()] = {
     let mut names = [""; BACKENDS.len()];
@@ -206,6 +214,7 @@ mod tests {
             );
         }
         assert!(backend("gurobi").is_none());
+        assert_eq!(CERTIFICATE_BACKEND, "clarabel");
         // the refusal lists every registered backend
         let e = backend_from_name("gurobi", &QpSettings::default())
             .err()

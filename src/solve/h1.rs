@@ -149,6 +149,9 @@ pub struct H1Norm {
     pub n: usize,
     /// The length `ℓ` the reference positions were divided by (their diameter).
     pub ell: f64,
+    /// `G` itself (upper triangle, CSC; the sparse path of the certificate's least-squares
+    /// problem takes it as the Hessian of its dual QP).
+    pub gram: CscMatrix,
     ldl: Option<SparseLdl>,
 }
 
@@ -179,12 +182,19 @@ impl H1Norm {
             return Err(H1Error::IsolatedVertex(v));
         }
         let xr: Vec<f64> = mesh.x_ref.iter().map(|v| v / ell).collect();
+        let gram = h1_gram_on(mesh, &xr, &col, n);
         let ldl = if n == 0 {
             None
         } else {
-            Some(SparseLdl::factor(&h1_gram_on(mesh, &xr, &col, n)).ok_or(H1Error::NotDefinite)?)
+            Some(SparseLdl::factor(&gram).ok_or(H1Error::NotDefinite)?)
         };
-        Ok(H1Norm { col, n, ell, ldl })
+        Ok(H1Norm {
+            col,
+            n,
+            ell,
+            gram,
+            ldl,
+        })
     }
 
     /// The restriction of a full-length vector (one entry per dof) to the columns.
