@@ -24,7 +24,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the outer loop on a scene and write a run directory.
-    Run(RunArgs),
+    Run(Box<RunArgs>),
     /// The scaling experiment: time per outer iteration, pairs, rows and peak memory against
     /// the number of vertices, per pruning mode (CSV + log-log SVG).
     Scaling(scaling::ScalingArgs),
@@ -48,14 +48,14 @@ fn main() {
             .is_some_and(|m| m.value_source(id) == Some(clap::parser::ValueSource::CommandLine))
     };
     let result = match cli.command {
-        Some(Command::Run(a)) => run_cmd(a, &explicit),
+        Some(Command::Run(a)) => run_cmd(*a, &explicit),
         Some(Command::Sweep(a)) => sweep::cmd_sweep(&a),
         Some(Command::Plot(a)) => plot::cmd_plot(&a),
         Some(Command::ExportQp(a)) => export::cmd_export(&a),
         Some(Command::Scaling(a)) => scaling::scaling_cmd(a),
         Some(Command::ScalingCase(a)) => scaling::case_cmd(a),
         None => match Cli::parse_from(["contactlab", "run"]).command {
-            Some(Command::Run(a)) => run_cmd(a, &explicit),
+            Some(Command::Run(a)) => run_cmd(*a, &explicit),
             _ => unreachable!("`run` parses to Command::Run"),
         },
     };
