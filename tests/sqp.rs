@@ -1,5 +1,5 @@
-//! The SQP outer method (docs/method.md, "The SQP outer method") on the sliding case of
-//! issue 18: the asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) at n = 40. Every iterate
+//! The SQP outer method (docs/method.md, "The SQP outer method") on a sliding case:
+//! the asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) at n = 40. Every iterate
 //! passes the exact ALL-PAIRS admissibility check ([`min_distance_brute_force`], not the
 //! broad phase the loop uses), J never increases, the status says what the certificate says,
 //! and the end state is lower than Pantz's fixed point from the same start.
