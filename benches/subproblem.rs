@@ -89,7 +89,7 @@ fn bench(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("ldlt_of_p", n), &qp, |b, qp| {
             b.iter(|| black_box(SparseLdl::factor(&qp.p).expect("P is definite")))
         });
-        let k = p_plus_ata(&qp.p, &qp.a);
+        let k = p_plus_ata(&qp.p, &qp.a, &qp.u);
         g.bench_with_input(BenchmarkId::new("ldlt_of_p_plus_rows", n), &k, |b, k| {
             b.iter(|| black_box(SparseLdl::factor(k).expect("P + AᵀA is definite")))
         });
@@ -97,9 +97,10 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// The upper triangle of `P + AᵀA` (`P` given by its upper triangle): the pattern of the
-/// Hessian with the contact rows'.
-fn p_plus_ata(p: &CscMatrix, a: &CscMatrix) -> CscMatrix {
+/// The upper triangle of `P + AᵀA` over the contact rows of `A` (its inequality rows, `u =
+/// +∞`; the gas' auxiliary equality rows, which couple a whole membrane, left out): the
+/// pattern of the Hessian with the contact rows'.
+fn p_plus_ata(p: &CscMatrix, a: &CscMatrix, u: &[f64]) -> CscMatrix {
     let mut t: Vec<(usize, usize, f64)> = Vec::new();
     for j in 0..p.ncols {
         for k in p.colptr[j]..p.colptr[j + 1] {
@@ -113,11 +114,11 @@ fn p_plus_ata(p: &CscMatrix, a: &CscMatrix) -> CscMatrix {
             rows[a.rowval[k]].push((j, a.nzval[k]));
         }
     }
-    for r in &rows {
-        for &(i, u) in r {
-            for &(j, v) in r {
+    for (r, _) in rows.iter().zip(u).filter(|(_, ub)| ub.is_infinite()) {
+        for &(i, x) in r {
+            for &(j, y) in r {
                 if i <= j {
-                    t.push((i, j, u * v));
+                    t.push((i, j, x * y));
                 }
             }
         }
