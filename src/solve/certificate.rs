@@ -1082,27 +1082,37 @@ mod tests {
         }
     }
 
+    /// Forty random least-squares problems (seeded) with their minimum by enumeration; every
+    /// third has a duplicate column (the same gradient from two pairs).
+    #[allow(clippy::type_complexity)]
+    fn random_problems() -> Vec<(DMatrix<f64>, DVector<f64>, Vec<Vec<(usize, f64)>>, f64)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        (0..40)
+            .map(|trial| {
+                let n = rng.gen_range(2..7);
+                let m = rng.gen_range(1..10);
+                let gm = spd(n, &mut rng);
+                let g = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
+                let mut cols: Vec<Vec<(usize, f64)>> = (0..m)
+                    .map(|_| {
+                        (0..rng.gen_range(1..4))
+                            .map(|_| (rng.gen_range(0..n), rng.gen_range(-1.0..1.0)))
+                            .collect()
+                    })
+                    .collect();
+                if trial % 3 == 0 {
+                    cols.push(cols[0].clone());
+                }
+                let dcols: Vec<DVector<f64>> = cols.iter().map(|b| dense(b, n)).collect();
+                let brute = brute_force(&gm, &g, &dcols);
+                (gm, g, cols, brute)
+            })
+            .collect()
+    }
+
     #[test]
     fn certificate_nnls_matches_enumeration_on_random_problems() {
-        let mut rng = ChaCha8Rng::seed_from_u64(7);
-        for trial in 0..40 {
-            let n = rng.gen_range(2..7);
-            let m = rng.gen_range(1..10);
-            let gm = spd(n, &mut rng);
-            let g = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
-            let mut cols: Vec<Vec<(usize, f64)>> = (0..m)
-                .map(|_| {
-                    (0..rng.gen_range(1..4))
-                        .map(|_| (rng.gen_range(0..n), rng.gen_range(-1.0..1.0)))
-                        .collect()
-                })
-                .collect();
-            if trial % 3 == 0 {
-                // a duplicate column (the same gradient from two pairs)
-                cols.push(cols[0].clone());
-            }
-            let dcols: Vec<DVector<f64>> = cols.iter().map(|b| dense(b, n)).collect();
-            let brute = brute_force(&gm, &g, &dcols);
+        for (trial, (gm, g, cols, brute)) in random_problems().into_iter().enumerate() {
             for warm in [vec![0.0; cols.len()], vec![1.0; cols.len()]] {
                 let s = run_nnls(&gm, &g, &cols, &warm);
                 assert_kkt(&gm, &g, &cols, &s);
@@ -1116,13 +1126,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn certificate_nnls_is_exact_on_degenerate_cones() {
-        // g in the cone of two columns b1, b2. The columns: each of b1, b2 thirty times, as
-        // exact positive multiples (the same gradient from several pairs) and as copies turned
-        // by 1e-6 to 1e-3 (nearly parallel contacts), plus columns pointing away. The
-        // minimum is 0; the method reaches it to round-off from a cold start and from a warm
-        // start on every column.
+    /// `g` in the cone of two columns b1, b2; the columns: each of b1, b2 thirty times, as
+    /// exact positive multiples and as copies turned by 1e-6 to 1e-3, plus columns pointing
+    /// away. The minimum of the least-squares problem is 0.
+    #[allow(clippy::type_complexity)]
+    fn degenerate_cone() -> (DMatrix<f64>, DVector<f64>, Vec<Vec<(usize, f64)>>) {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let n = 8;
         let gm = spd(n, &mut rng);
@@ -1144,6 +1152,17 @@ mod tests {
             }
             cols.push(vec![(rng.gen_range(0..n), -rng.gen_range(0.1..1.0))]);
         }
+        (gm, g, cols)
+    }
+
+    #[test]
+    fn certificate_nnls_is_exact_on_degenerate_cones() {
+        // g in the cone of two columns b1, b2. The columns: each of b1, b2 thirty times, as
+        // exact positive multiples (the same gradient from several pairs) and as copies turned
+        // by 1e-6 to 1e-3 (nearly parallel contacts), plus columns pointing away. The
+        // minimum is 0; the method reaches it to round-off from a cold start and from a warm
+        // start on every column.
+        let (gm, g, cols) = degenerate_cone();
         for warm in [vec![0.0; cols.len()], vec![1.0; cols.len()]] {
             let s = run_nnls(&gm, &g, &cols, &warm);
             assert_kkt(&gm, &g, &cols, &s);
@@ -1189,25 +1208,8 @@ mod tests {
         // The sparse path on the random problems of the enumeration test: its residual,
         // recomputed from non-negative multipliers, is never below the minimum (round-off
         // aside) and close to it: measured at most 9.5e-12 ‖g‖ above, asserted 1e-10.
-        let mut rng = ChaCha8Rng::seed_from_u64(7);
         let mut worst = 0.0f64;
-        for trial in 0..40 {
-            let n = rng.gen_range(2..7);
-            let m = rng.gen_range(1..10);
-            let gm = spd(n, &mut rng);
-            let g = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
-            let mut cols: Vec<Vec<(usize, f64)>> = (0..m)
-                .map(|_| {
-                    (0..rng.gen_range(1..4))
-                        .map(|_| (rng.gen_range(0..n), rng.gen_range(-1.0..1.0)))
-                        .collect()
-                })
-                .collect();
-            if trial % 3 == 0 {
-                cols.push(cols[0].clone());
-            }
-            let dcols: Vec<DVector<f64>> = cols.iter().map(|b| dense(b, n)).collect();
-            let brute = brute_force(&gm, &g, &dcols);
+        for (trial, (gm, g, cols, brute)) in random_problems().into_iter().enumerate() {
             let s = run_dual_qp(&gm, &g, &cols);
             let gn = hm1(&gm, &g);
             assert!(s.mu.iter().all(|&v| v >= 0.0));
@@ -1233,27 +1235,7 @@ mod tests {
         // 30 times, exact multiples and copies turned by 1e-6 to 1e-3): the minimum is 0. The
         // first QP leaves 6.4e-6 of ‖g‖ (√tol, see `nnls_dual_qp`), the refinement 1.2e-8
         // (the active set: below 1e-12).
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let n = 8;
-        let gm = spd(n, &mut rng);
-        let b1: Vec<(usize, f64)> = vec![(0, 1.0), (3, -0.5), (5, 0.25)];
-        let b2: Vec<(usize, f64)> = vec![(1, 1.0), (3, 0.5), (6, -1.0)];
-        let g = dense(&b1, n) * 2.0 + dense(&b2, n) * 0.7;
-        let mut cols = Vec::new();
-        for k in 0..30 {
-            for b in [&b1, &b2] {
-                let mut c: Vec<(usize, f64)> = b
-                    .iter()
-                    .map(|&(i, v)| (i, v * (1.0 + 0.1 * k as f64)))
-                    .collect();
-                if k % 2 == 1 {
-                    let turn = 10f64.powi(-6 + (k % 4));
-                    c.push((rng.gen_range(0..n), turn * rng.gen_range(-1.0..1.0)));
-                }
-                cols.push(c);
-            }
-            cols.push(vec![(rng.gen_range(0..n), -rng.gen_range(0.1..1.0))]);
-        }
+        let (gm, g, cols) = degenerate_cone();
         let s = run_dual_qp(&gm, &g, &cols);
         assert!(
             s.residual <= 3e-8 * hm1(&gm, &g),
