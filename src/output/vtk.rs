@@ -204,22 +204,10 @@ pub fn vtu_string_with(
         }
         s.push_str(">\n");
         for (name, vals) in point_data {
-            let _ = writeln!(
-                s,
-                "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"1\" format=\"ascii\">",
-                xml_escape(name)
-            );
-            push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
-            s.push_str("        </DataArray>\n");
+            push_f64_array(&mut s, name, 1, vals);
         }
         for (name, vals) in &fields.point_vectors {
-            let _ = writeln!(
-                s,
-                "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"3\" format=\"ascii\">",
-                xml_escape(name)
-            );
-            push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
-            s.push_str("        </DataArray>\n");
+            push_f64_array(&mut s, name, 3, vals);
         }
         s.push_str("      </PointData>\n");
     }
@@ -239,13 +227,7 @@ pub fn vtu_string_with(
     );
     s.push_str("        </DataArray>\n");
     for (name, vals) in &fields.cell_scalars {
-        let _ = writeln!(
-            s,
-            "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"1\" format=\"ascii\">",
-            xml_escape(name)
-        );
-        push_values(&mut s, vals.iter().map(|&v| fmt_f64(v)), 6);
-        s.push_str("        </DataArray>\n");
+        push_f64_array(&mut s, name, 1, vals);
     }
     s.push_str("      </CellData>\n");
 
@@ -306,6 +288,17 @@ pub fn vtu_string_with(
 }
 
 /// Appends whitespace-separated values, `per_line` per line, indented.
+/// One ASCII `Float64` `DataArray` named `name` with `ncomp` components per tuple.
+fn push_f64_array(s: &mut String, name: &str, ncomp: usize, vals: &[f64]) {
+    let _ = writeln!(
+        s,
+        "        <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{ncomp}\" format=\"ascii\">",
+        xml_escape(name)
+    );
+    push_values(s, vals.iter().map(|&v| fmt_f64(v)), 6);
+    s.push_str("        </DataArray>\n");
+}
+
 fn push_values(s: &mut String, vals: impl Iterator<Item = String>, per_line: usize) {
     let mut count = 0usize;
     for v in vals {
