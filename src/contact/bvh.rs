@@ -52,6 +52,10 @@ struct Entry<const D: usize> {
     item: u32,
 }
 
+/// Output length of one part of [`Bvh::dual_reduced`] below which it is not reduced (tiny in
+/// the unit tests, so that they reduce in the middle of a part too).
+const PART_REDUCE_MIN: usize = if cfg!(test) { 4 } else { 4096 };
+
 /// A bounding volume hierarchy over axis-aligned boxes (module documentation): built by median
 /// splits, queried exactly.
 #[derive(Clone, Debug)]
@@ -304,6 +308,20 @@ impl<const D: usize> Bvh<D> {
         keep: &(dyn Fn(usize, usize) -> bool + Sync),
         leaf: &(dyn Fn(u32, u32, &mut Vec<R>) + Sync),
     ) -> Vec<R> {
+        self.dual_reduced(other, keep, leaf, &|_| {})
+    }
+
+    /// [`Bvh::dual`], with `part(out)` applied to the output of each independent part of the
+    /// traversal before the parts are concatenated, and whenever that output has doubled since
+    /// the last call: a reduction that may be applied to any prefix (keep the best item per
+    /// key) bounds the memory by the reduced outputs instead of every item found.
+    pub fn dual_reduced<R: Send>(
+        &self,
+        other: Option<&Bvh<D>>,
+        keep: &(dyn Fn(usize, usize) -> bool + Sync),
+        leaf: &(dyn Fn(u32, u32, &mut Vec<R>) + Sync),
+        part: &(dyn Fn(&mut Vec<R>) + Sync),
+    ) -> Vec<R> {
         let same = other.is_none();
         let other = other.unwrap_or(self);
         if self.nodes.is_empty() || other.nodes.is_empty() {
@@ -339,9 +357,14 @@ impl<const D: usize> Bvh<D> {
             .par_iter()
             .map(|&start| {
                 let mut out = Vec::new();
+                let mut limit = PART_REDUCE_MIN;
                 let mut stack = vec![start];
                 let mut kids = Vec::with_capacity(4);
                 while let Some((i, j)) = stack.pop() {
+                    if out.len() > limit {
+                        part(&mut out);
+                        limit = (2 * out.len()).max(PART_REDUCE_MIN);
+                    }
                     if !keep(i, j) {
                         continue;
                     }
@@ -361,6 +384,7 @@ impl<const D: usize> Bvh<D> {
                         stack.extend(kids.iter().rev());
                     }
                 }
+                part(&mut out);
                 out
             })
             .collect();

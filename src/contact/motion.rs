@@ -20,7 +20,11 @@
 //! (O(N)), and a dual traversal prunes the node pairs whose boxes at ψ are farther apart than
 //! `ε_QP` plus the largest relative displacement their displacement boxes allow. The pairs that
 //! survive go through the exact row test one by one, as they are found: nothing but the
-//! violated rows is stored, so memory is bounded by the output.
+//! violated rows is stored. The lazy oracle wants only the most violated pair per point
+//! ([`MotionSearch::most_violated_per_point`]), and the violated pairs grow like the points
+//! times the pairs each point crosses (a membrane moving thousands of h in the balloons' first
+//! step): that choice is made inside the traversal, part by part, so its memory is bounded by
+//! the points.
 
 use crate::contact::broad_phase::Aabb;
 use crate::contact::bvh::Bvh;
@@ -131,6 +135,40 @@ impl<const D: usize> MotionSearch<D> {
         })
     }
 
+    /// Of [`MotionSearch::violated`]'s pairs that `skip` does not reject, per point (the
+    /// vertex of a point pair, the first edge of an edge–edge pair: [`point_key`]) the one with
+    /// the smallest row value at `phi` (on ties the first in pair order), sorted by pair: the
+    /// lazy oracle's choice. The choice is made during the traversal, so memory is bounded by
+    /// the points, not by every violated pair (which grows like the points times the pairs a
+    /// point crosses).
+    pub fn most_violated_per_point(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        eps_qp: f64,
+        skip: &(dyn Fn(ContactPair) -> bool + Sync),
+    ) -> Vec<PairRows> {
+        let reduce = |out: &mut Vec<PairRows>| keep_most_violated(out, phi);
+        self.traverse_reduced(
+            mesh,
+            psi,
+            phi,
+            eps_qp,
+            &|pair, out: &mut Vec<PairRows>| {
+                if skip(pair) {
+                    return;
+                }
+                if let Some(r) = pair_rows(mesh, psi, pair) {
+                    if r.min_value(phi) < eps_qp {
+                        out.push(r);
+                    }
+                }
+            },
+            &reduce,
+        )
+    }
+
     /// Every pair of disjoint contact elements with a free vertex, allowed by the mesh's
     /// contact filter, whose distance can fall below `thickness` somewhere on the straight
     /// motion from `psi` to `phi`, sorted by pair: the pairs with
@@ -166,6 +204,20 @@ impl<const D: usize> MotionSearch<D> {
         phi: &[f64],
         reach0: f64,
         emit: &(dyn Fn(ContactPair, &mut Vec<R>) + Sync),
+    ) -> Vec<R> {
+        self.traverse_reduced(mesh, psi, phi, reach0, emit, &|_| {})
+    }
+
+    /// [`MotionSearch::traverse`] with `reduce` applied to the output of each part of the
+    /// traversal ([`Bvh::dual_reduced`]) and to the whole before it is sorted.
+    fn traverse_reduced<R: Send + HasPair>(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        reach0: f64,
+        emit: &(dyn Fn(ContactPair, &mut Vec<R>) + Sync),
+        reduce: &(dyn Fn(&mut Vec<R>) + Sync),
     ) -> Vec<R> {
         let u: Vec<f64> = phi.iter().zip(psi).map(|(a, b)| a - b).collect();
         let filter = mesh.filter();
@@ -207,7 +259,7 @@ impl<const D: usize> MotionSearch<D> {
         };
         let mut out: Vec<R> = if D == 2 {
             let (tv, te) = (&self.vertex_tree, &self.edge_tree);
-            tv.dual(
+            tv.dual_reduced(
                 Some(te),
                 &|i, j| keep(tv, &vert_u, te, &edge_u, i, j),
                 &|k, a, out| {
@@ -218,11 +270,12 @@ impl<const D: usize> MotionSearch<D> {
                     }
                     test(ContactPair::PointEdge { x, a }, &[x], &e, out);
                 },
+                reduce,
             )
         } else {
             let (tv, tf) = (&self.vertex_tree, self.face_tree.as_ref().expect("3D"));
             let face_u = Moved::new(tf, &u, &norm, |k| &mesh.faces[k as usize][..]);
-            let mut out = tv.dual(
+            let mut out = tv.dual_reduced(
                 Some(tf),
                 &|i, j| keep(tv, &vert_u, tf, &face_u, i, j),
                 &|k, t, out| {
@@ -238,9 +291,10 @@ impl<const D: usize> MotionSearch<D> {
                         out,
                     );
                 },
+                reduce,
             );
             let te = &self.edge_tree;
-            out.extend(te.dual(
+            out.extend(te.dual_reduced(
                 None,
                 &|i, j| keep(te, &edge_u, te, &edge_u, i, j),
                 &|a, b, out| {
@@ -253,12 +307,52 @@ impl<const D: usize> MotionSearch<D> {
                     }
                     test(ContactPair::EdgeEdge { a, b }, &ea, &eb, out);
                 },
+                reduce,
             ));
             out
         };
+        reduce(&mut out);
         out.sort_unstable_by_key(|r| r.pair());
         out
     }
+}
+
+/// The key of a pair in the lazy oracle's choice of one pair per point: the vertex of a
+/// point pair, or (offset past every vertex index) the first edge of an edge–edge pair.
+pub fn point_key(pair: ContactPair) -> usize {
+    match pair {
+        ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
+        ContactPair::EdgeEdge { a, .. } => usize::MAX / 2 + a,
+    }
+}
+
+/// Keeps, of `rows`, per [`point_key`] the pair of smallest row value at `phi` (on ties the
+/// smaller pair), in their order in `rows`. Applied to any prefix and then to the rest, it
+/// keeps what it keeps applied once to the whole.
+fn keep_most_violated(rows: &mut Vec<PairRows>, phi: &[f64]) {
+    use std::collections::hash_map::Entry;
+    let mut best: std::collections::HashMap<usize, (f64, usize)> =
+        std::collections::HashMap::with_capacity(rows.len());
+    for (i, r) in rows.iter().enumerate() {
+        let v = r.min_value(phi);
+        match best.entry(point_key(r.pair)) {
+            Entry::Vacant(e) => {
+                e.insert((v, i));
+            }
+            Entry::Occupied(mut e) => {
+                let (bv, bi) = *e.get();
+                if v < bv || (v == bv && r.pair < rows[bi].pair) {
+                    e.insert((v, i));
+                }
+            }
+        }
+    }
+    if best.len() == rows.len() {
+        return;
+    }
+    let mut keep: Vec<usize> = best.into_values().map(|(_, i)| i).collect();
+    keep.sort_unstable();
+    *rows = keep.into_iter().map(|i| rows[i]).collect();
 }
 
 /// What the traversal's outputs are sorted by.
@@ -301,6 +395,21 @@ impl AnyMotionSearch {
         match self {
             AnyMotionSearch::Two(s) => s.violated(mesh, psi, phi, eps_qp),
             AnyMotionSearch::Three(s) => s.violated(mesh, psi, phi, eps_qp),
+        }
+    }
+
+    /// [`MotionSearch::most_violated_per_point`].
+    pub fn most_violated_per_point(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        eps_qp: f64,
+        skip: &(dyn Fn(ContactPair) -> bool + Sync),
+    ) -> Vec<PairRows> {
+        match self {
+            AnyMotionSearch::Two(s) => s.most_violated_per_point(mesh, psi, phi, eps_qp, skip),
+            AnyMotionSearch::Three(s) => s.most_violated_per_point(mesh, psi, phi, eps_qp, skip),
         }
     }
 
@@ -425,6 +534,27 @@ mod tests {
                 let want = brute(mesh, psi, &phi, eps);
                 nonempty += usize::from(!want.is_empty());
                 assert_eq!(got, want, "trial {trial}, scale {scale}, eps {eps}");
+                // The oracle's choice made in the traversal = the choice made afterwards
+                // from every violated pair (some of them skipped as carried).
+                let skip = |p: ContactPair| want.binary_search(&p).is_ok_and(|i| i % 3 == 1);
+                let got: Vec<ContactPair> = search
+                    .most_violated_per_point(mesh, psi, &phi, eps, &skip)
+                    .iter()
+                    .map(|r| r.pair)
+                    .collect();
+                let rows: Vec<PairRows> = want
+                    .iter()
+                    .filter(|&&p| !skip(p))
+                    .map(|&p| pair_rows(mesh, psi, p).expect("rows"))
+                    .collect();
+                let pick = crate::solve::outer::most_violated_per_point(
+                    rows.iter().map(|r| (r.pair, r.min_value(&phi))),
+                );
+                let want: Vec<ContactPair> = pick.into_iter().map(|i| rows[i].pair).collect();
+                assert_eq!(
+                    got, want,
+                    "most violated: trial {trial}, scale {scale}, eps {eps}"
+                );
             }
         }
         nonempty

@@ -9,7 +9,7 @@
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
 //! frames or a progress line.
 
-use crate::contact::motion::AnyMotionSearch;
+use crate::contact::motion::{point_key, AnyMotionSearch};
 use crate::contact::MinDistance;
 use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
@@ -394,12 +394,11 @@ fn lazy_oracle<'a>(
             carried = rows.iter().map(|r| r.pair).collect();
         }
         let search = search.get_or_insert_with(|| AnyMotionSearch::new(mesh, psi));
-        let mut violated = search.violated(mesh, psi, phi, eps_qp);
-        violated.retain(|r| !carried.contains(&r.pair));
         // Per point (or first edge), only the most violated pair: the QP solved again with
         // these moves the point, and the oracle is asked again about the next point found.
-        let pick = most_violated_per_point(violated.iter().map(|r| (r.pair, r.min_value(phi))));
-        let added: Vec<PairRows> = pick.into_iter().map(|i| violated[i]).collect();
+        // The choice is made inside the traversal, which never holds every violated pair.
+        let added =
+            search.most_violated_per_point(mesh, psi, phi, eps_qp, &|p| carried.contains(&p));
         carried.extend(added.iter().map(|r| r.pair));
         added
     }
@@ -413,11 +412,7 @@ pub(crate) fn most_violated_per_point(
 ) -> Vec<usize> {
     let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
     for (i, (pair, v)) in violated.enumerate() {
-        let key = match pair {
-            ContactPair::PointEdge { x, .. } | ContactPair::PointTriangle { x, .. } => x,
-            ContactPair::EdgeEdge { a, .. } => usize::MAX / 2 + a,
-        };
-        let e = best.entry(key).or_insert((v, i));
+        let e = best.entry(point_key(pair)).or_insert((v, i));
         if v < e.0 || (v == e.0 && i < e.1) {
             *e = (v, i);
         }
