@@ -214,4 +214,12 @@ pub trait QpBackend: Send {
     fn name(&self) -> &'static str;
     /// Solves `qp`, optionally from a warm start.
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError>;
+    /// The tolerance it solves to (`eps_abs`), or `None` when it has none that
+    /// [`QpBackend::set_tolerance`] changes.
+    fn tolerance(&self) -> Option<f64> {
+        None
+    }
+    /// Solves the next QPs to `eps_abs = eps_rel = tol` (ignored where
+    /// [`QpBackend::tolerance`] is `None`).
+    fn set_tolerance(&mut self, _tol: f64) {}
 }

@@ -425,6 +425,15 @@ impl QpBackend for IpBackend {
         "ip"
     }
 
+    fn tolerance(&self) -> Option<f64> {
+        Some(self.settings.eps_abs)
+    }
+
+    fn set_tolerance(&mut self, tol: f64) {
+        self.settings.eps_abs = tol;
+        self.settings.eps_rel = tol;
+    }
+
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         let start = Instant::now();
         self.settings.validate()?;

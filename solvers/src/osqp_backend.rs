@@ -193,6 +193,15 @@ impl QpBackend for OsqpBackend {
         "osqp"
     }
 
+    fn tolerance(&self) -> Option<f64> {
+        Some(self.settings.eps_abs)
+    }
+
+    fn set_tolerance(&mut self, tol: f64) {
+        self.settings.eps_abs = tol;
+        self.settings.eps_rel = tol;
+    }
+
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         let start = Instant::now();
         self.settings.validate()?;

@@ -205,6 +205,14 @@ impl QpBackend for Presolved {
         self.inner.name()
     }
 
+    fn tolerance(&self) -> Option<f64> {
+        self.inner.tolerance()
+    }
+
+    fn set_tolerance(&mut self, tol: f64) {
+        self.inner.set_tolerance(tol);
+    }
+
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         qp.validate()?;
         let pre = Presolve::new(qp);

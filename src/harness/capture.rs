@@ -36,6 +36,14 @@ impl QpBackend for Capture<'_> {
         self.inner.name()
     }
 
+    fn tolerance(&self) -> Option<f64> {
+        self.inner.tolerance()
+    }
+
+    fn set_tolerance(&mut self, tol: f64) {
+        self.inner.set_tolerance(tol);
+    }
+
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         let r = self.inner.solve(qp, warm);
         (self.sink)(self.count, qp, &r);

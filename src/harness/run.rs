@@ -249,6 +249,9 @@ struct Summary {
     sqp_steps: usize,
     /// Outer steps where the SQP step collapsed and Pantz's step was taken (0 for `pantz`).
     fallback_steps: usize,
+    /// The backend tolerance the SQP method tightened to for its certificate (`null` where it
+    /// kept `qp_tol`).
+    qp_tol_tightened: Option<f64>,
     inner_iterations: usize,
     backend_iterations: usize,
     initial_energy: f64,
@@ -656,6 +659,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         outer_iterations: res.outer_iterations,
         sqp_steps: res.sqp_steps,
         fallback_steps: res.fallback_steps,
+        qp_tol_tightened: res.qp_tol_tightened,
         inner_iterations: res.inner_iterations,
         backend_iterations: res.backend_iterations,
         initial_energy: energies[0].1,

@@ -311,7 +311,15 @@ pub struct RunResult {
     pub sqp_steps: usize,
     /// Outer steps where the SQP step collapsed and Pantz's step was taken.
     pub fallback_steps: usize,
+    /// The backend tolerance of the last SQP steps, where the SQP method tightened it to
+    /// reach its certificate ([`SQP_TOLERANCE_FLOOR`]); `None` where it did not.
+    pub qp_tol_tightened: Option<f64>,
 }
+
+/// The tightest backend tolerance the SQP method asks for when its step is stationary for the
+/// QP but the certificate does not hold (docs/method.md, "The SQP outer method"): each such
+/// step divides the tolerance by 10, down to this floor.
+pub const SQP_TOLERANCE_FLOOR: f64 = 1e-11;
 
 /// The outcome of the final polish at ε (docs/method.md, "The row margin").
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -320,8 +328,12 @@ pub struct Polish {
     pub energy_change: f64,
     /// Its inner steps (also counted in the run's total).
     pub inner_iterations: usize,
-    /// Whether its iterate was kept: admissible, its QPs solved, J not raised.
+    /// Whether its iterate was kept: admissible, its QPs solved, J not raised, and (after an
+    /// SQP step) certified where the state before it was.
     pub accepted: bool,
+    /// After an SQP step: the polished state failed the certificate that the state before
+    /// it passed, so the state before it (rows at ε + δ) is returned.
+    pub rejected_by_certificate: bool,
 }
 
 /// Round-off allowance of the exact admissibility check: `16 u · max(1, max |x_i|)`, `u` the
@@ -838,7 +850,9 @@ pub fn run_observed(
         psi: Vec::new(),
         sqp_steps: 0,
         fallback_steps: 0,
+        qp_tol_tightened: None,
     };
+    let tolerance0 = backend.tolerance();
     // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
     // last sub-problem stalled in its line search.
     let mut stopped_by_rule = false;
@@ -956,8 +970,35 @@ pub fn run_observed(
         }
         // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
         // 64u|J| an energy difference is round-off.
-        let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+        let round = 64.0 * f64::EPSILON * jx.abs();
+        let tol = (settings.tol_j * e_scale).max(round);
         if !step.box_active && (jprev - jx).abs() <= tol {
+            // The SQP method does not creep (docs/method.md): where its step still lowers J
+            // above round-off, or is stationary only to the backend's tolerance, and the
+            // certificate does not hold, it goes on, in the second case with the backend's
+            // tolerance divided by 10 (down to SQP_TOLERANCE_FLOOR).
+            let progress = (jprev - jx).abs() > round;
+            let tighter = backend
+                .tolerance()
+                .map(|t| (0.1 * t).max(SQP_TOLERANCE_FLOOR))
+                .filter(|&t| backend.tolerance().is_some_and(|t0| t < t0));
+            if last_sqp && (progress || tighter.is_some()) {
+                let warm: HashMap<ContactPair, f64> = result
+                    .last_rows
+                    .iter()
+                    .zip(&result.multipliers)
+                    .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+                    .collect();
+                let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+                let kappa = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?.kappa;
+                if kappa > settings.tol_kappa {
+                    if let (false, Some(t)) = (progress, tighter) {
+                        backend.set_tolerance(t);
+                        result.qp_tol_tightened = Some(t);
+                    }
+                    continue;
+                }
+            }
             stopped_by_rule = true;
             stalled = sub.line_search_stalled;
             break;
@@ -967,6 +1008,9 @@ pub fn run_observed(
     // the last sub-problem, min J over T(ψ) of the last ψ, is solved again from the final
     // state with its rows at ε itself, so that the reported state and energy carry no bias
     // from the margin δ. Kept only if admissible, solved, and not above J.
+    // After an SQP step, the state before an accepted polish (x, J, distance, rows,
+    // multipliers): returned instead where only it is certified.
+    let mut unpolished = None;
     if settings.polish && stopped_by_rule {
         let k = result.outer_iterations;
         // After an SQP step the natural neighbourhood is T(x) at the final x: at a KKT point
@@ -990,8 +1034,18 @@ pub fn run_observed(
             energy_change: if accepted { sub.energy - jx } else { 0.0 },
             inner_iterations: sub.inner_iterations,
             accepted,
+            rejected_by_certificate: false,
         });
         if accepted {
+            if last_sqp {
+                unpolished = Some((
+                    x.clone(),
+                    jx,
+                    result.min_distance,
+                    std::mem::take(&mut result.last_rows),
+                    std::mem::take(&mut result.multipliers),
+                ));
+            }
             x = sub.y;
             result.energy = sub.energy;
             result.min_distance = step.min_distance;
@@ -1010,6 +1064,32 @@ pub fn run_observed(
         .collect();
     let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
     result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
+    if let Some((x0, j0, md0, rows0, mult0)) = unpolished {
+        // The polish is a step of Pantz's map from the SQP end state; where it leaves a state
+        // that the certificate does not pass while the state before it does, the latter is
+        // the result (its rows at ε + δ, so J keeps the margin's bias).
+        if result.certificate.kappa > settings.tol_kappa {
+            let warm0: HashMap<ContactPair, f64> = rows0
+                .iter()
+                .zip(&mult0)
+                .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+                .collect();
+            let c0 = certificate(mesh, energy, &x0, eps, active_tol, &norms, &warm0)?;
+            if c0.kappa <= settings.tol_kappa {
+                x = x0;
+                result.energy = j0;
+                result.min_distance = md0;
+                result.last_rows = rows0;
+                result.multipliers = mult0;
+                result.certificate = c0;
+                if let Some(p) = result.polish.as_mut() {
+                    p.energy_change = 0.0;
+                    p.accepted = false;
+                    p.rejected_by_certificate = true;
+                }
+            }
+        }
+    }
     if stopped_by_rule {
         result.status = if result.certificate.kappa <= settings.tol_kappa {
             RunStatus::Converged
@@ -1018,6 +1098,9 @@ pub fn run_observed(
         } else {
             RunStatus::FixedPoint
         };
+    }
+    if let Some(t) = tolerance0 {
+        backend.set_tolerance(t);
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();

@@ -40,7 +40,11 @@
 //!      `η = ccd_thickness·ε` on the way, so nothing passes through anything.
 //! 3. **Stationary**: the QP step has a non-negative slope, so x is a KKT point of the
 //!    linearized problem, which has the true distances' gradients: (9) of (3) (Lemma 5.1,
-//!    Lemma 5.3) at the level `ε + δ`.
+//!    Lemma 5.3) at the level `ε + δ` (a pair closer than that has its row at its own
+//!    distance, so that `s = 0` is feasible). The outer loop goes on where the certificate
+//!    does not hold yet: while J still falls above round-off, and, where the step is
+//!    stationary only to the backend's accuracy, with the backend's tolerance divided by 10
+//!    (`crate::solve::outer::SQP_TOLERANCE_FLOOR`).
 //! 4. **Collapsed**: no trial passed, or the QP failed. The outer loop then takes Pantz's step
 //!    from x (Lemma 4.2 keeps it admissible), and it takes it too when a safeguard (the exact or
 //!    the continuous check, or a correction) cut the step and J moved by less than the
@@ -499,10 +503,12 @@ pub(crate) fn sqp_step(
     let delta = inner.margin_rel * eps + inner.margin_abs;
     let eps_qp = eps + delta;
     let mut out = SqpStep::empty();
-    // The QP's row level (each row at ε + δ; a closure so that a per-pair level can be
-    // tried), and the correction: pairs closer than `trigger` at a trial are moved to
-    // `target`.
-    let row_level = |_: &PairRows| eps_qp;
+    // The QP's row level: ε + δ, or the pair's distance at x where it is closer (between
+    // the correction's trigger ε + δ/2 and ε + δ), so that s = 0 is always feasible and a
+    // non-negative slope means x is a KKT point of the linearized problem, not that the QP
+    // asked a close pair back to ε + δ uphill. The correction: pairs closer than `trigger`
+    // at a trial are moved to `target`.
+    let row_level = |r: &PairRows| eps_qp.min(r.distance);
     let (trigger, target) = (eps + 0.5 * delta, eps_qp);
     let tp = Instant::now();
     let search = AnyMotionSearch::new(mesh, x);
@@ -819,8 +825,8 @@ mod tests {
 
     /// Every curvature mode on the asymmetric balloons n = 8: admissible iterates and J
     /// non-increasing (`sqp_run` checks both), the same minimum as without curvature, and the
-    /// measured ranking: `interior` takes fewer outer steps than `off` here, the other modes no
-    /// fewer (docs/method.md, "The constraints' curvature (measured)").
+    /// measured ranking: `interior` takes fewer outer steps than `off` here, `full` more
+    /// (docs/method.md, "The constraints' curvature (measured)").
     #[test]
     fn curvature_modes_reach_the_same_minimum() {
         let run = |c: Curvature| {
@@ -848,15 +854,14 @@ mod tests {
                 "{}: J {j} against {j_off}",
                 c.as_str()
             );
-            // measured: interior 34 steps, off 43, psd and tangent 54, full 85
-            if c == Curvature::Interior {
-                assert!(steps < steps_off, "interior: {steps} ≥ {steps_off} steps");
-            } else {
-                assert!(
-                    steps >= steps_off,
-                    "{}: {steps} < {steps_off} steps",
-                    c.as_str()
-                );
+            // measured: interior 34 steps, off 55, psd and tangent 54, full 85, all converged
+            // (off took 43 to a fixed point before the SQP endgame went on to the certificate)
+            match c {
+                Curvature::Interior => {
+                    assert!(steps < steps_off, "interior: {steps} ≥ {steps_off} steps")
+                }
+                Curvature::Full => assert!(steps > steps_off, "full: {steps} ≤ {steps_off} steps"),
+                _ => {}
             }
         }
     }
