@@ -321,6 +321,12 @@ pub struct RunResult {
 /// step divides the tolerance by 10, down to this floor.
 pub const SQP_TOLERANCE_FLOOR: f64 = 1e-11;
 
+/// The shortest SQP step (fraction of the QP's step the line search kept) that counts as
+/// progress in the SQP method's endgame: shorter steps lower J by round-off-sized amounts for
+/// thousands of steps (asymmetric balloons n = 20), so they end the run, or tighten the
+/// backend's tolerance first ([`SQP_TOLERANCE_FLOOR`]).
+pub const SQP_ENDGAME_MIN_STEP: f64 = 1.0 / 1024.0;
+
 /// The outcome of the final polish at ε (docs/method.md, "The row margin").
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Polish {
@@ -974,10 +980,13 @@ pub fn run_observed(
         let tol = (settings.tol_j * e_scale).max(round);
         if !step.box_active && (jprev - jx).abs() <= tol {
             // The SQP method does not creep (docs/method.md): where its step still lowers J
-            // above round-off, or is stationary only to the backend's tolerance, and the
-            // certificate does not hold, it goes on, in the second case with the backend's
-            // tolerance divided by 10 (down to SQP_TOLERANCE_FLOOR).
-            let progress = (jprev - jx).abs() > round;
+            // above round-off with a step the line search did not cut below
+            // SQP_ENDGAME_MIN_STEP, or is stationary only to the backend's tolerance, and the
+            // certificate does not hold, it goes on, in the second case (and where the line
+            // search cut the step that short) with the backend's tolerance divided by 10
+            // (down to SQP_TOLERANCE_FLOOR).
+            let progress =
+                (jprev - jx).abs() > round && step.record.step_length >= SQP_ENDGAME_MIN_STEP;
             let tighter = backend
                 .tolerance()
                 .map(|t| (0.1 * t).max(SQP_TOLERANCE_FLOOR))

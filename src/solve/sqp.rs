@@ -42,9 +42,10 @@
 //!    linearized problem, which has the true distances' gradients: (9) of (3) (Lemma 5.1,
 //!    Lemma 5.3) at the level `ε + δ` (a pair closer than that has its row at its own
 //!    distance, so that `s = 0` is feasible). The outer loop goes on where the certificate
-//!    does not hold yet: while J still falls above round-off, and, where the step is
-//!    stationary only to the backend's accuracy, with the backend's tolerance divided by 10
-//!    (`crate::solve::outer::SQP_TOLERANCE_FLOOR`).
+//!    does not hold yet: while J still falls above round-off with a step of at least
+//!    `crate::solve::outer::SQP_ENDGAME_MIN_STEP`, and otherwise (the step stationary or cut
+//!    that short, which the backend's accuracy can cause) with the backend's tolerance divided
+//!    by 10 (`crate::solve::outer::SQP_TOLERANCE_FLOOR`).
 //! 4. **Collapsed**: no trial passed, or the QP failed. The outer loop then takes Pantz's step
 //!    from x (Lemma 4.2 keeps it admissible), and it takes it too when a safeguard (the exact or
 //!    the continuous check, or a correction) cut the step and J moved by less than the
