@@ -93,53 +93,11 @@ fn sqp_on_asymmetric_balloons_stays_admissible_and_ends_below_pantz() {
     assert!(kappa < pantz.certificate.kappa);
 }
 
-/// The solids (a compressed block relaxing onto another, n = 3): at the default Clarabel
-/// tolerance 1e-9 the SQP step becomes stationary for its QP while the certificate still
-/// fails (κ 1.9e-5 > 1e-5); the method then divides the backend's tolerance by 10 and goes
-/// on, and ends certified. The backend gets its tolerance back after the run.
-#[test]
-fn sqp_tightens_the_backend_tolerance_until_the_certificate_holds() {
-    use contactlab::scene::solids::{build, SolidsParams};
-    let scene = build(&SolidsParams::default()).unwrap();
+/// A Clarabel run of `scene` with the SQP method at the default settings: the result, every
+/// iterate's step length, and the backend's tolerance before and after the run.
+fn sqp_run_of(scene: &contactlab::scene::Scene) -> (RunResult, Vec<f64>, f64, Option<f64>) {
     let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let tol0 = b.tolerance().unwrap();
-    let settings = OuterSettings {
-        method: OuterMethod::Sqp,
-        ..Default::default()
-    };
-    let res = run(
-        &scene.mesh,
-        &scene.energy,
-        scene.eps,
-        &scene.x0,
-        b.as_mut(),
-        &settings,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    let kappa = res.certificate.kappa;
-    assert_eq!(res.status, RunStatus::Converged, "κ = {kappa:e}");
-    assert!(kappa <= settings.tol_kappa);
-    // Measured: tightened once, to 1e-10, 12 outer steps, κ 7.5e-6.
-    let t = res.qp_tol_tightened.expect("the tolerance was tightened");
-    assert!(t < tol0 && t >= contactlab::solve::outer::SQP_TOLERANCE_FLOOR);
-    assert_eq!(b.tolerance(), Some(tol0));
-}
-
-/// The endgame does not creep: on the asymmetric balloons n = 20 at ε = h/10 the line search
-/// cuts the late SQP steps to t ~ 1e-5 while J still falls by ~1e-11 a step; counting those as
-/// progress ran the case to `max_outer = 2000`. Steps shorter than SQP_ENDGAME_MIN_STEP are
-/// not progress: measured, the run stops `fixed_point` after 345 steps (κ 3.0e-5), J below
-/// the stopping rule's first firing.
-#[test]
-fn sqp_endgame_stops_where_the_steps_collapse() {
-    let scene = build(&BalloonsParams {
-        n: 20,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
-    let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let settings = OuterSettings {
         method: OuterMethod::Sqp,
         ..Default::default()
@@ -155,12 +113,42 @@ fn sqp_endgame_stops_where_the_steps_collapse() {
         &mut |r, _| lengths.push(r.step_length),
     )
     .unwrap();
-    assert_eq!(
-        res.status,
-        RunStatus::FixedPoint,
-        "κ {:e}",
-        res.certificate.kappa
-    );
+    (res, lengths, tol0, b.tolerance())
+}
+
+/// The solids (a compressed block relaxing onto another, n = 3): at the default Clarabel
+/// tolerance 1e-9 the SQP step becomes stationary for its QP while the certificate still
+/// fails (κ 1.9e-5 > 1e-5); the method then divides the backend's tolerance by 10 and goes
+/// on, and ends certified. The backend gets its tolerance back after the run.
+#[test]
+fn sqp_tightens_the_backend_tolerance_until_the_certificate_holds() {
+    use contactlab::scene::solids::{build, SolidsParams};
+    let (res, _, tol0, tol_after) = sqp_run_of(&build(&SolidsParams::default()).unwrap());
+    let kappa = res.certificate.kappa;
+    assert_eq!(res.status, RunStatus::Converged, "κ = {kappa:e}");
+    assert!(kappa <= OuterSettings::default().tol_kappa);
+    // Measured: tightened once, to 1e-10; 13 outer steps, κ 5.1e-6.
+    let t = res.qp_tol_tightened.expect("the tolerance was tightened");
+    assert!(t < tol0 && t >= contactlab::solve::outer::SQP_TOLERANCE_FLOOR);
+    assert_eq!(tol_after, Some(tol0));
+}
+
+/// The endgame does not creep: on the asymmetric balloons n = 20 at ε = h/10 the line search
+/// cuts the late SQP steps to t ~ 1e-5 while J still falls by ~1e-11 a step; counting those as
+/// progress ran the case to `max_outer = 2000`. Steps shorter than SQP_ENDGAME_MIN_STEP are
+/// not progress: measured, the run stops `fixed_point` after 345 steps (κ 3.0e-5), J below
+/// the stopping rule's first firing.
+#[test]
+fn sqp_endgame_stops_where_the_steps_collapse() {
+    let scene = build(&BalloonsParams {
+        n: 20,
+        heights: [0.9, 0.2, 0.9, 0.2],
+        ..Default::default()
+    })
+    .unwrap();
+    let (res, lengths, _, _) = sqp_run_of(&scene);
+    let kappa = res.certificate.kappa;
+    assert_eq!(res.status, RunStatus::FixedPoint, "κ {kappa:e}");
     assert!(
         res.outer_iterations < 1000,
         "{} steps",

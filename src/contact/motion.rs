@@ -126,13 +126,7 @@ impl<const D: usize> MotionSearch<D> {
     /// (the order of [`ContactPair`]). Exactly the pairs of the all-pairs mode that `phi`
     /// violates (module documentation).
     pub fn violated(&self, mesh: &Mesh, psi: &[f64], phi: &[f64], eps_qp: f64) -> Vec<PairRows> {
-        self.traverse(mesh, psi, phi, eps_qp, &|pair, out: &mut Vec<PairRows>| {
-            if let Some(r) = pair_rows(mesh, psi, pair) {
-                if r.min_value(phi) < eps_qp {
-                    out.push(r);
-                }
-            }
-        })
+        self.violated_where(mesh, psi, phi, eps_qp, &|_| false, &|_| {})
     }
 
     /// Of [`MotionSearch::violated`]'s pairs that `skip` does not reject, per point (the
@@ -150,6 +144,20 @@ impl<const D: usize> MotionSearch<D> {
         skip: &(dyn Fn(ContactPair) -> bool + Sync),
     ) -> Vec<PairRows> {
         let reduce = |out: &mut Vec<PairRows>| keep_most_violated(out, phi);
+        self.violated_where(mesh, psi, phi, eps_qp, skip, &reduce)
+    }
+
+    /// The violated pairs (as [`MotionSearch::violated`]) that `skip` does not reject, with
+    /// `reduce` applied as the traversal goes ([`Bvh::dual_reduced`]).
+    fn violated_where(
+        &self,
+        mesh: &Mesh,
+        psi: &[f64],
+        phi: &[f64],
+        eps_qp: f64,
+        skip: &(dyn Fn(ContactPair) -> bool + Sync),
+        reduce: &(dyn Fn(&mut Vec<PairRows>) + Sync),
+    ) -> Vec<PairRows> {
         self.traverse_reduced(
             mesh,
             psi,
@@ -165,7 +173,7 @@ impl<const D: usize> MotionSearch<D> {
                     }
                 }
             },
-            &reduce,
+            reduce,
         )
     }
 

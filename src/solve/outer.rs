@@ -422,6 +422,15 @@ fn lazy_oracle<'a>(
     }
 }
 
+/// A sub-problem's multipliers summed per pair: the warm start of the certificate's active
+/// set.
+fn pair_multipliers(rows: &[PairRows], multipliers: &[[f64; 4]]) -> HashMap<ContactPair, f64> {
+    rows.iter()
+        .zip(multipliers)
+        .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
+        .collect()
+}
+
 /// The indices of the pairs to add to a working set, of `(pair, value)` (values below the
 /// row level): per point (the vertex of a point pair, the first edge of an edge–edge pair) the
 /// pair of smallest value (the first on ties), in index order.
@@ -992,12 +1001,7 @@ pub fn run_observed(
                 .map(|t| (0.1 * t).max(SQP_TOLERANCE_FLOOR))
                 .filter(|&t| backend.tolerance().is_some_and(|t0| t < t0));
             if last_sqp && (progress || tighter.is_some()) {
-                let warm: HashMap<ContactPair, f64> = result
-                    .last_rows
-                    .iter()
-                    .zip(&result.multipliers)
-                    .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
-                    .collect();
+                let warm = pair_multipliers(&result.last_rows, &result.multipliers);
                 let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
                 let kappa = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?.kappa;
                 if kappa > settings.tol_kappa {
@@ -1065,12 +1069,7 @@ pub fn run_observed(
     result.psi = psi;
     // The certificate at the returned point, with the last sub-problem's multipliers (summed
     // per pair) as the warm start of its active set.
-    let warm: HashMap<ContactPair, f64> = result
-        .last_rows
-        .iter()
-        .zip(&result.multipliers)
-        .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
-        .collect();
+    let warm = pair_multipliers(&result.last_rows, &result.multipliers);
     let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
     result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
     if let Some((x0, j0, md0, rows0, mult0)) = unpolished {
@@ -1078,11 +1077,7 @@ pub fn run_observed(
         // that the certificate does not pass while the state before it does, the latter is
         // the result (its rows at ε + δ, so J keeps the margin's bias).
         if result.certificate.kappa > settings.tol_kappa {
-            let warm0: HashMap<ContactPair, f64> = rows0
-                .iter()
-                .zip(&mult0)
-                .map(|(r, m)| (r.pair, m.iter().take(r.len).sum()))
-                .collect();
+            let warm0 = pair_multipliers(&rows0, &mult0);
             let c0 = certificate(mesh, energy, &x0, eps, active_tol, &norms, &warm0)?;
             if c0.kappa <= settings.tol_kappa {
                 x = x0;
