@@ -45,7 +45,7 @@
 //!    does not hold yet: while J still falls above round-off with a step of at least
 //!    `crate::solve::outer::SQP_ENDGAME_MIN_STEP`, and otherwise (the step stationary or cut
 //!    that short, which the backend's accuracy can cause) with the backend's tolerance divided
-//!    by 10 (`crate::solve::outer::SQP_TOLERANCE_FLOOR`).
+//!    by 10, down to 1/100 of the run's own (`crate::solve::outer::SQP_TOLERANCE_RANGE`).
 //! 4. **Collapsed**: no trial passed, or the QP failed. The outer loop then takes Pantz's step
 //!    from x (Lemma 4.2 keeps it admissible), and it takes it too when a safeguard (the exact or
 //!    the continuous check, or a correction) cut the step and J moved by less than the
