@@ -227,3 +227,72 @@ fn the_binary_exits_1_on_a_failure_status_with_its_outputs_written() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// Clarabel that fails (`NumericalError`) at every solve once its tolerance is set below the
+/// preset's: the SQP endgame's tightening meets a backend at its limit.
+struct FailsWhenTightened {
+    inner: Box<dyn QpBackend>,
+    tol0: f64,
+}
+
+impl QpBackend for FailsWhenTightened {
+    fn name(&self) -> &'static str {
+        "fails-when-tightened"
+    }
+    fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
+        let mut sol = self.inner.solve(qp, warm)?;
+        if self.inner.tolerance().is_some_and(|t| t < self.tol0) {
+            sol.status = QpStatus::NumericalError;
+        }
+        Ok(sol)
+    }
+    fn tolerance(&self) -> Option<f64> {
+        self.inner.tolerance()
+    }
+    fn set_tolerance(&mut self, tol: f64) {
+        self.inner.set_tolerance(tol);
+    }
+}
+
+/// The solids with the SQP method tighten the tolerance once (tests/sqp.rs); when the backend
+/// then fails, the run does not end `subproblem_failed`: it stops at the state where the
+/// stopping rule held, with the run's tolerance back, admissible, its status the
+/// certificate's (here `fixed_point`: that state's κ is above tol_κ).
+#[test]
+fn a_backend_failing_at_the_tightened_tolerance_ends_the_sqp_run_at_its_last_state() {
+    use contactlab::scene::solids::{build, SolidsParams};
+    use contactlab::solve::sqp::OuterMethod;
+    let scene = build(&SolidsParams::default()).unwrap();
+    let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+    let tol0 = inner.tolerance().unwrap();
+    let mut b = FailsWhenTightened { inner, tol0 };
+    let settings = OuterSettings {
+        method: OuterMethod::Sqp,
+        ..Default::default()
+    };
+    let mut last = f64::INFINITY;
+    let res = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        &mut b,
+        &settings,
+        &mut |r, _| last = r.energy,
+    )
+    .unwrap();
+    assert!(
+        res.qp_tol_tightened.is_some(),
+        "the endgame did not tighten"
+    );
+    assert_eq!(
+        res.status,
+        RunStatus::FixedPoint,
+        "κ {:e}",
+        res.certificate.kappa
+    );
+    assert_eq!(b.tolerance(), Some(tol0));
+    assert!(res.energy <= last);
+    let d = min_distance(&scene.mesh, &res.x, 2.0 * scene.eps, true).distance;
+    assert!(d >= scene.eps * (1.0 - 1e-12), "distance {d:e}");
+}

@@ -311,8 +311,9 @@ pub struct RunResult {
     pub sqp_steps: usize,
     /// Outer steps where the SQP step collapsed and Pantz's step was taken.
     pub fallback_steps: usize,
-    /// The backend tolerance of the last SQP steps, where the SQP method tightened it to
-    /// reach its certificate ([`SQP_TOLERANCE_RANGE`]); `None` where it did not.
+    /// The tightest backend tolerance the SQP method set to reach its certificate
+    /// ([`SQP_TOLERANCE_RANGE`]); `None` where it kept the run's own. Where a QP failed at it,
+    /// the run stopped at the state before that step.
     pub qp_tol_tightened: Option<f64>,
 }
 
@@ -927,6 +928,16 @@ pub fn run_observed(
                 }
             }
         };
+        // A QP that fails at a tolerance the endgame tightened is the backend's limit, not the
+        // run's: the tolerance goes back to the run's own, the step is dropped, and the run
+        // stops at x (where the stopping rule held), its status by the certificate.
+        if result.qp_tol_tightened.is_some() && step.sub.qp_status != QpStatus::Solved {
+            if let Some(t) = tolerance0 {
+                backend.set_tolerance(t);
+            }
+            stopped_by_rule = true;
+            break;
+        }
         last_sqp = step.record.step == "sqp";
         let sub = step.sub;
         result.outer_iterations = k;
