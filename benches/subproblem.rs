@@ -7,7 +7,9 @@
 //! pattern: what an interior point on the condensed system factorizes at each iteration), the
 //! units an inner step is measured against.
 //!
-//! Run: `cargo bench --bench subproblem` (criterion; results in `target/criterion/`).
+//! Run: `cargo bench --bench subproblem` (criterion; results in `target/criterion/`). Other
+//! sizes: `SUBPROBLEM_SIZES="1600" cargo bench --bench subproblem` (n = 1600 takes about ten
+//! minutes: ten samples of each whole first step).
 
 use std::time::Duration;
 
@@ -53,7 +55,19 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("subproblem");
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(20));
-    for n in [160usize, 640] {
+    let sizes: Vec<usize> = match std::env::var("SUBPROBLEM_SIZES") {
+        Ok(v) => v
+            .split_whitespace()
+            .map(|t| {
+                t.parse().unwrap_or_else(|_| {
+                    eprintln!("SUBPROBLEM_SIZES: {t:?} is not a balloons size (e.g. \"160 640\")");
+                    std::process::exit(2)
+                })
+            })
+            .collect(),
+        Err(_) => vec![160, 640],
+    };
+    for n in sizes {
         let s = scene(n);
         for backend in ["clarabel", "ip"] {
             g.bench_with_input(
