@@ -876,6 +876,9 @@ pub fn run_observed(
     // last sub-problem stalled in its line search.
     let mut stopped_by_rule = false;
     let mut stalled = false;
+    // The certificate at x, where the SQP endgame computed it since x last changed (the end of
+    // the run then reuses it instead of computing it again).
+    let mut cert_at_x: Option<Certificate> = None;
     let margin = settings.inner.margin_rel * eps + settings.inner.margin_abs;
     // The last sub-problem's multipliers by pair: the next step's warm start.
     let mut last_mult: HashMap<ContactPair, [f64; 4]> = HashMap::new();
@@ -964,6 +967,7 @@ pub fn run_observed(
             .fold(0.0, f64::max)
             .max(1e-3 * hbar);
         psi = std::mem::replace(&mut x, sub.y);
+        cert_at_x = None;
         jx = sub.energy;
         e_scale = step.energy_scale;
         result.energy = jx;
@@ -1017,7 +1021,9 @@ pub fn run_observed(
             if last_sqp && (progress || tighter.is_some()) {
                 let warm = pair_multipliers(&result.last_rows, &result.multipliers);
                 let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
-                let kappa = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?.kappa;
+                let c = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
+                let kappa = c.kappa;
+                cert_at_x = Some(c);
                 if kappa > settings.tol_kappa {
                     if let (false, Some(t)) = (progress, tighter) {
                         backend.set_tolerance(t);
@@ -1071,9 +1077,11 @@ pub fn run_observed(
                     result.min_distance,
                     std::mem::take(&mut result.last_rows),
                     std::mem::take(&mut result.multipliers),
+                    cert_at_x.take(),
                 ));
             }
             x = sub.y;
+            cert_at_x = None;
             result.energy = sub.energy;
             result.min_distance = step.min_distance;
             result.last_rows = sub.rows;
@@ -1082,17 +1090,28 @@ pub fn run_observed(
     }
     result.psi = psi;
     // The certificate at the returned point, with the last sub-problem's multipliers (summed
-    // per pair) as the warm start of its active set.
-    let warm = pair_multipliers(&result.last_rows, &result.multipliers);
+    // per pair) as the warm start of its active set (the SQP endgame's, where it computed it
+    // at that point).
     let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
-    result.certificate = certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?;
-    if let Some((x0, j0, md0, rows0, mult0)) = unpolished {
+    result.certificate = match cert_at_x {
+        Some(c) => c,
+        None => {
+            let warm = pair_multipliers(&result.last_rows, &result.multipliers);
+            certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?
+        }
+    };
+    if let Some((x0, j0, md0, rows0, mult0, cert0)) = unpolished {
         // The polish is a step of Pantz's map from the SQP end state; where it leaves a state
         // that the certificate does not pass while the state before it does, the latter is
         // the result (its rows at ε + δ, so J keeps the margin's bias).
         if result.certificate.kappa > settings.tol_kappa {
-            let warm0 = pair_multipliers(&rows0, &mult0);
-            let c0 = certificate(mesh, energy, &x0, eps, active_tol, &norms, &warm0)?;
+            let c0 = match cert0 {
+                Some(c) => c,
+                None => {
+                    let warm0 = pair_multipliers(&rows0, &mult0);
+                    certificate(mesh, energy, &x0, eps, active_tol, &norms, &warm0)?
+                }
+            };
             if c0.kappa <= settings.tol_kappa {
                 x = x0;
                 result.energy = j0;
