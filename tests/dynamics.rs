@@ -491,3 +491,97 @@ fn dynamics_cli_run_directory_and_bad_input() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--dynamic"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every step's certificate reaches the dynamic summary: a step is `converged` exactly where
+/// its κ is within `tol_κ` and `fixed_point` where it is not, the metrics count the latter and
+/// take the largest κ, and the SQP counts add up to the outer iterations under
+/// `OuterMethod::Sqp` (0 under Pantz's).
+#[test]
+fn dynamics_collide_certificate_per_step_and_sqp_counts() {
+    use contactlab::harness::case::dynamic_metrics;
+    use contactlab::solve::sqp::OuterMethod;
+    let steps = 12;
+    for method in [OuterMethod::Pantz, OuterMethod::Sqp] {
+        let mut ds = collide(&CollideParams::default()).unwrap();
+        let dt = ds.dt;
+        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+        let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density).unwrap();
+        let mut system = System {
+            mesh: &ds.scene.mesh,
+            energy: &mut ds.scene.energy,
+            eps: ds.scene.eps,
+            mass,
+        };
+        let outer = OuterSettings {
+            method,
+            ..Default::default()
+        };
+        let res = simulate(
+            &mut system,
+            &ds.scene.x0,
+            &ds.v0,
+            b.as_mut(),
+            &outer,
+            &DynamicSettings {
+                dt,
+                steps,
+                scheme: Scheme::Euler,
+            },
+            &mut |_, _, _| {},
+        )
+        .unwrap();
+        let free_mass = system.free_mass();
+        let m = dynamic_metrics(&res, free_mass, true);
+        let taken = &res.records[1..];
+        assert_eq!(taken.len(), steps);
+        for r in taken {
+            assert!(
+                r.kappa.is_finite() && r.kappa >= 0.0,
+                "step {}: κ {}",
+                r.step,
+                r.kappa
+            );
+            // Without contact (free flight) every force of the balance vanishes at the
+            // step's minimum: certified, not round-off over round-off.
+            if r.active_contacts == 0 {
+                assert!(
+                    r.kappa <= outer.tol_kappa,
+                    "free-flight step {}: κ {}",
+                    r.step,
+                    r.kappa
+                );
+            }
+            match r.status {
+                "converged" => assert!(r.kappa <= outer.tol_kappa, "step {}", r.step),
+                "fixed_point" => assert!(r.kappa > outer.tol_kappa, "step {}", r.step),
+                _ => {}
+            }
+            assert_eq!(
+                r.sqp_steps + r.fallback_steps,
+                if method == OuterMethod::Sqp {
+                    r.outer_iterations
+                } else {
+                    0
+                },
+                "step {}",
+                r.step
+            );
+        }
+        let fixed = taken.iter().filter(|r| r.status == "fixed_point").count();
+        let kmax = taken.iter().map(|r| r.kappa).fold(0.0, f64::max);
+        eprintln!(
+            "collide {method:?}: {fixed} of {steps} steps fixed_point, max κ {kmax:e}, {} sqp / {} fallback of {} outer",
+            m.sqp_steps, m.fallback_steps, m.outer_iterations
+        );
+        assert_eq!(m.steps_fixed_point, fixed);
+        assert_eq!(m.max_kappa, kmax);
+        assert_eq!(
+            m.sqp_steps + m.fallback_steps,
+            if method == OuterMethod::Sqp {
+                m.outer_iterations
+            } else {
+                0
+            }
+        );
+    }
+}

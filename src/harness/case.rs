@@ -198,6 +198,15 @@ pub struct DynamicMetrics {
     pub steps_max_outer: usize,
     /// Steps whose outer loop ended `line_search_failed` (accepted).
     pub steps_line_search_failed: usize,
+    /// Steps whose outer loop stopped where the minimality certificate does not hold
+    /// (`fixed_point`: accepted, not certified).
+    pub steps_fixed_point: usize,
+    /// The largest certificate κ over the steps (NaN when no step was taken).
+    pub max_kappa: f64,
+    /// Outer iterations that were SQP steps, summed over the steps.
+    pub sqp_steps: usize,
+    /// Outer iterations where the SQP step collapsed and Pantz's was taken, summed.
+    pub fallback_steps: usize,
     /// Every outer iterate of every step passed the exact admissibility check.
     pub all_admissible: bool,
     /// Smallest end-of-step distance.
@@ -287,6 +296,14 @@ pub fn dynamic_metrics(res: &DynamicResult, free_mass: f64, conserves: bool) -> 
             .iter()
             .filter(|s| s.status == "line_search_failed")
             .count(),
+        steps_fixed_point: steps.iter().filter(|s| s.status == "fixed_point").count(),
+        max_kappa: steps
+            .iter()
+            .map(|s| s.kappa)
+            .reduce(f64::max)
+            .unwrap_or(f64::NAN),
+        sqp_steps: steps.iter().map(|s| s.sqp_steps).sum(),
+        fallback_steps: steps.iter().map(|s| s.fallback_steps).sum(),
         all_admissible: r.iter().all(|s| s.admissible),
         min_distance: r
             .iter()

@@ -295,7 +295,7 @@ fn run_prepared(
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{} {}: {} of {steps} steps ({}), E {:.10e} -> {:.10e}, K_end = {:.3e}, all admissible = {}, {} steps not converged (max outer), {:.1} s -> {}",
+        "{} {}: {} of {steps} steps ({}), E {:.10e} -> {:.10e}, K_end = {:.3e}, all admissible = {}, {} steps not converged (max outer), {} not certified (fixed point, max kappa {:.3e}), {:.1} s -> {}",
         label,
         scheme.as_str(),
         metrics.steps_taken,
@@ -305,6 +305,8 @@ fn run_prepared(
         metrics.final_kinetic,
         metrics.all_admissible,
         metrics.steps_max_outer,
+        metrics.steps_fixed_point,
+        metrics.max_kappa,
         metrics.wall_time_s,
         out.display()
     );

@@ -320,6 +320,11 @@ pub struct DynamicRow {
     pub steps_taken: Option<usize>,
     /// Steps ended by max_outer.
     pub steps_max_outer: Option<usize>,
+    /// Steps that ended where the minimality certificate does not hold (`fixed_point`).
+    pub steps_fixed_point: Option<usize>,
+    /// The largest certificate κ over the steps.
+    #[serde(serialize_with = "opt_float")]
+    pub max_kappa: Option<f64>,
     /// Every iterate passed the exact admissibility check.
     pub all_admissible: Option<bool>,
     /// Smallest end-of-step distance.
@@ -359,6 +364,10 @@ pub struct DynamicRow {
     pub outer_iterations: Option<usize>,
     /// Largest outer iterations of one step.
     pub max_outer_per_step: Option<usize>,
+    /// Outer iterations that were SQP steps, summed over the steps.
+    pub sqp_steps: Option<usize>,
+    /// Outer iterations where the SQP step fell back to Pantz's, summed over the steps.
+    pub fallback_steps: Option<usize>,
     /// Wall time of the stepping.
     #[serde(serialize_with = "opt_float")]
     pub wall_time_s: Option<f64>,
@@ -391,6 +400,8 @@ impl DynamicRow {
             status: mt.status.clone(),
             steps_taken: Some(mt.steps_taken),
             steps_max_outer: Some(mt.steps_max_outer),
+            steps_fixed_point: Some(mt.steps_fixed_point),
+            max_kappa: Some(mt.max_kappa),
             all_admissible: Some(mt.all_admissible),
             min_distance: Some(mt.min_distance),
             initial_energy: Some(mt.initial_energy),
@@ -401,6 +412,8 @@ impl DynamicRow {
             momentum_error: mt.momentum_error,
             outer_iterations: Some(mt.outer_iterations),
             max_outer_per_step: Some(mt.max_outer_per_step),
+            sqp_steps: Some(mt.sqp_steps),
+            fallback_steps: Some(mt.fallback_steps),
             wall_time_s: Some(mt.wall_time_s),
             ..Default::default()
         };
@@ -575,10 +588,11 @@ mod tests {
                     t_solve_s,t_diagnostics_s,energy_error,position_error_h1,max_violation,\
                     reference_energy,error";
         let dynamic = "dim,h,eps,dt,steps,scheme,qp_tol,tol_j,status,steps_taken,\
-                       steps_max_outer,all_admissible,min_distance,initial_energy,final_energy,\
-                       final_kinetic,max_energy_increase,energy_drift,momentum_error,\
-                       force_mean_rest,force_jump_rest,force_std_rest,weight_ratio_rest,\
-                       outer_iterations,max_outer_per_step,wall_time_s,t_total_s,error";
+                       steps_max_outer,steps_fixed_point,max_kappa,all_admissible,min_distance,\
+                       initial_energy,final_energy,final_kinetic,max_energy_increase,\
+                       energy_drift,momentum_error,force_mean_rest,force_jump_rest,\
+                       force_std_rest,weight_ratio_rest,outer_iterations,max_outer_per_step,\
+                       sqp_steps,fallback_steps,wall_time_s,t_total_s,error";
         let scaling = "n,vertices,pruning,kind,trust_delta0,max_inner,status,outer_iterations,\
                        inner_iterations,pairs,rows,step1_t_pairs_s,step1_t_assembly_s,\
                        step1_t_solve_s,step1_t_step_s,total_t_pairs_s,total_t_assembly_s,\

@@ -118,7 +118,9 @@ pub struct Certificate {
     pub gradient: f64,
     /// `max_t ‖J_t'(φ_h)‖_{H⁻¹}` over J's terms, on all dofs.
     pub term_force: f64,
-    /// `S = max(gradient, term_force)`.
+    /// `S = max(gradient, term_force)`; the outer loop floors it at
+    /// [`crate::solve::outer::CERTIFICATE_SCALE_FLOOR`] times `S` at the run's start (a state
+    /// where every force of the balance vanishes to round-off).
     pub scale: f64,
     /// Pairs at distance ε (within `active_tol`) or held by the last sub-problem (a multiplier
     /// above `1e-4` of the largest).

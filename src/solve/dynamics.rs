@@ -314,6 +314,13 @@ pub struct StepRecord {
     pub outer_iterations: usize,
     /// Status of the step's outer loop.
     pub status: &'static str,
+    /// The minimality certificate κ at the end of the step (docs/method.md, "The minimality
+    /// certificate"; NaN for step 0).
+    pub kappa: f64,
+    /// Outer iterations of the step that were SQP steps (`--outer-method sqp`).
+    pub sqp_steps: usize,
+    /// Outer iterations of the step where the SQP step collapsed and Pantz's step was taken.
+    pub fallback_steps: usize,
     /// `J_step` at the end of the step (★).
     pub step_energy: f64,
     /// Wall time of the step's outer loop, seconds.
@@ -580,6 +587,9 @@ pub fn simulate_observed(
             contact_force: 0.0,
             outer_iterations: 0,
             status: "initial",
+            kappa: f64::NAN,
+            sqp_steps: 0,
+            fallback_steps: 0,
             step_energy: f64::NAN,
             wall_time_s: 0.0,
         }
@@ -672,6 +682,9 @@ pub fn simulate_observed(
                 .fold(0.0, |s, f| s + f.force);
             rec.outer_iterations = res.outer_iterations;
             rec.status = res.status.as_str();
+            rec.kappa = res.certificate.kappa;
+            rec.sqp_steps = res.sqp_steps;
+            rec.fallback_steps = res.fallback_steps;
             rec.wall_time_s = res.wall_time_s;
             observer.iteration(&StepEvent {
                 record: &rec,
