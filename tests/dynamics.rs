@@ -21,6 +21,26 @@ fn run(
     steps: usize,
     probe: Option<&contactlab::energy::TotalEnergy>,
 ) -> (DynamicResult, Vec<Vec<PairForce>>, OuterSettings, Vec<f64>) {
+    let (res, forces, outer, gnorms, _) =
+        run_with(ds, scheme, dt, steps, OuterSettings::default(), probe);
+    (res, forces, outer, gnorms)
+}
+
+/// [`run`] with the outer settings `outer`; also returns the free mass.
+fn run_with(
+    ds: &mut DynamicScene,
+    scheme: Scheme,
+    dt: f64,
+    steps: usize,
+    outer: OuterSettings,
+    probe: Option<&contactlab::energy::TotalEnergy>,
+) -> (
+    DynamicResult,
+    Vec<Vec<PairForce>>,
+    OuterSettings,
+    Vec<f64>,
+    f64,
+) {
     let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density).unwrap();
     let mut system = System {
@@ -29,7 +49,6 @@ fn run(
         eps: ds.scene.eps,
         mass,
     };
-    let outer = OuterSettings::default();
     let mut forces = Vec::new();
     let mut gnorms = vec![0.0];
     let probe = probe.map(|p| (p, system.mass.clone()));
@@ -59,7 +78,8 @@ fn run(
         res.steps,
         t.elapsed().as_secs_f64()
     );
-    (res, forces, outer, gnorms)
+    let free_mass = system.free_mass();
+    (res, forces, outer, gnorms, free_mass)
 }
 
 /// The per-step tolerance of an energy claim, derived from the stopping rule: if a step's
@@ -504,33 +524,12 @@ fn dynamics_collide_certificate_per_step_and_sqp_counts() {
     for method in [OuterMethod::Pantz, OuterMethod::Sqp] {
         let mut ds = collide(&CollideParams::default()).unwrap();
         let dt = ds.dt;
-        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
-        let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density).unwrap();
-        let mut system = System {
-            mesh: &ds.scene.mesh,
-            energy: &mut ds.scene.energy,
-            eps: ds.scene.eps,
-            mass,
-        };
         let outer = OuterSettings {
             method,
             ..Default::default()
         };
-        let res = simulate(
-            &mut system,
-            &ds.scene.x0,
-            &ds.v0,
-            b.as_mut(),
-            &outer,
-            &DynamicSettings {
-                dt,
-                steps,
-                scheme: Scheme::Euler,
-            },
-            &mut |_, _, _| {},
-        )
-        .unwrap();
-        let free_mass = system.free_mass();
+        let (res, _, outer, _, free_mass) =
+            run_with(&mut ds, Scheme::Euler, dt, steps, outer, None);
         let m = dynamic_metrics(&res, free_mass, true);
         let taken = &res.records[1..];
         assert_eq!(taken.len(), steps);
