@@ -20,7 +20,8 @@
 //! ```
 //!
 //! factorized once per iteration by `faer`'s supernodal sparse `LDLᵀ` (AMD ordering, symbolic
-//! phase once per QP, dynamic regularization of the pivots by their expected signs), with
+//! phase once per QP pattern: the backend keeps the last one and reuses it while the next
+//! QP's condensed matrix has the same pattern; dynamic regularization of the pivots by their expected signs), with
 //! `ρ, δ = 1e-10·max(1, max diag)`. Both predictor and corrector use the one factorization;
 //! the corrector's direction gets up to two steps of iterative refinement against the
 //! unregularized Newton system, each skipped once that system's residual is below
@@ -62,6 +63,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side, Spec};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A refinement step of the corrector is skipped once the Newton system's residual is below
@@ -72,15 +74,25 @@ const REFINE_BELOW: f64 = 1e-3;
 const MAX_IP_ITERATIONS: usize = 200;
 
 /// The interior-point backend (module documentation).
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct IpBackend {
     settings: QpSettings,
+    /// The last QP's pattern and symbolic factorization (module documentation).
+    symbolic: Option<SymbolicCache>,
 }
 
 impl IpBackend {
     /// A backend with `settings` (validated at each solve).
     pub fn new(settings: QpSettings) -> Self {
-        IpBackend { settings }
+        IpBackend {
+            settings,
+            symbolic: None,
+        }
+    }
+
+    /// Solves so far that reused the previous QP's symbolic factorization.
+    pub fn symbolic_reuses(&self) -> usize {
+        self.symbolic.as_ref().map_or(0, |c| c.hits)
     }
 }
 
@@ -208,6 +220,17 @@ impl Split {
     }
 }
 
+/// The pattern of the last QP's condensed matrix and its symbolic factorization (AMD
+/// ordering, elimination tree), kept by the backend between solves.
+#[derive(Debug)]
+struct SymbolicCache {
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    /// Solves that reused a cached factorization, since the backend was made.
+    hits: usize,
+}
+
 /// The condensed matrix `K` (upper triangle, CSC, `n + m_E` columns): its pattern, where each
 /// contribution goes, its factorization.
 struct Kkt {
@@ -225,7 +248,7 @@ struct Kkt {
     g_pos: Vec<(usize, f64)>,
     /// The value positions of `E`'s entries and their values.
     e_pos: Vec<(usize, f64)>,
-    symbolic: SymbolicCholesky<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
     sym_mat: SymbolicSparseColMat<usize>,
     signs: Vec<i8>,
     lvals: Vec<f64>,
@@ -233,7 +256,9 @@ struct Kkt {
 }
 
 impl Kkt {
-    fn new(qp: &Qp, split: &Split) -> Option<Kkt> {
+    /// `cache`: the last QP's pattern and symbolic factorization, reused when this QP's
+    /// pattern is the same (and replaced otherwise).
+    fn new(qp: &Qp, split: &Split, cache: &mut Option<SymbolicCache>) -> Option<Kkt> {
         let n = qp.n();
         let me = split.eq.len();
         let dim = n + me;
@@ -308,15 +333,30 @@ impl Kkt {
             .collect();
         let sym_mat =
             SymbolicSparseColMat::new_checked(dim, dim, colptr.clone(), None, rowval.clone());
-        let symbolic = factorize_symbolic_cholesky(
-            sym_mat.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams {
-                ..Default::default()
-            },
-        )
-        .ok()?;
+        let symbolic = match cache {
+            Some(c) if c.colptr == colptr && c.rowval == rowval => {
+                c.hits += 1;
+                Arc::clone(&c.symbolic)
+            }
+            _ => {
+                let symbolic = Arc::new(
+                    factorize_symbolic_cholesky(
+                        sym_mat.as_ref(),
+                        Side::Upper,
+                        SymmetricOrdering::Amd,
+                        CholeskySymbolicParams::default(),
+                    )
+                    .ok()?,
+                );
+                *cache = Some(SymbolicCache {
+                    colptr: colptr.clone(),
+                    rowval: rowval.clone(),
+                    symbolic: Arc::clone(&symbolic),
+                    hits: cache.as_ref().map_or(0, |c| c.hits),
+                });
+                symbolic
+            }
+        };
         let mut signs = vec![1i8; dim];
         for s in signs.iter_mut().skip(n) {
             *s = -1;
@@ -468,7 +508,7 @@ impl QpBackend for IpBackend {
             iterations: 0,
             solve_time_s: 0.0,
         };
-        let Some(mut kkt) = Kkt::new(qp, &split) else {
+        let Some(mut kkt) = Kkt::new(qp, &split, &mut self.symbolic) else {
             out.solve_time_s = start.elapsed().as_secs_f64();
             return Ok(out);
         };
@@ -871,5 +911,35 @@ mod tests {
             warm.iterations,
             cold.iterations
         );
+    }
+
+    /// The symbolic factorization is reused when the next QP has the same pattern (other
+    /// values), with the same answer as a fresh backend, bit for bit; a QP of another pattern
+    /// gets its own.
+    #[test]
+    fn symbolic_factorization_reused_for_the_same_pattern() {
+        let settings = QpSettings {
+            eps_abs: 1e-10,
+            eps_rel: 1e-10,
+            ..QpSettings::default()
+        };
+        let a = chain_qp(40);
+        let mut b = chain_qp(40);
+        b.q.iter_mut().for_each(|v| *v *= 1.5);
+        b.l.iter_mut().for_each(|v| *v -= 0.01);
+        let mut ip = IpBackend::new(settings.clone());
+        let sa = ip.solve(&a, None).unwrap();
+        assert_eq!(ip.symbolic_reuses(), 0);
+        let sb = ip.solve(&b, None).unwrap();
+        assert_eq!(ip.symbolic_reuses(), 1);
+        let fresh = IpBackend::new(settings.clone()).solve(&b, None).unwrap();
+        assert_eq!(sb.status, QpStatus::Solved);
+        assert_eq!(sb.x, fresh.x);
+        assert_eq!(sb.iterations, fresh.iterations);
+        assert_ne!(sa.x, sb.x);
+        ip.solve(&chain_qp(41), None).unwrap();
+        assert_eq!(ip.symbolic_reuses(), 1, "another pattern reused the cache");
+        ip.solve(&chain_qp(41), None).unwrap();
+        assert_eq!(ip.symbolic_reuses(), 2);
     }
 }
