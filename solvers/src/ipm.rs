@@ -811,14 +811,19 @@ mod tests {
         Qp { p, q, a, l, u }
     }
 
-    #[test]
-    fn agrees_with_clarabel_on_a_contact_like_qp() {
-        let qp = chain_qp(60);
-        let settings = QpSettings {
+    /// The settings of the tests below: both tolerances at 1e-10.
+    fn tight() -> QpSettings {
+        QpSettings {
             eps_abs: 1e-10,
             eps_rel: 1e-10,
             ..QpSettings::default()
-        };
+        }
+    }
+
+    #[test]
+    fn agrees_with_clarabel_on_a_contact_like_qp() {
+        let qp = chain_qp(60);
+        let settings = tight();
         let ip = IpBackend::new(settings.clone()).solve(&qp, None).unwrap();
         let cl = ClarabelBackend::new(settings).solve(&qp, None).unwrap();
         assert_eq!(ip.status, QpStatus::Solved);
@@ -844,11 +849,7 @@ mod tests {
     /// nonsense (wrong signs, huge) still reach it.
     #[test]
     fn warm_start_duals_are_used_and_safe() {
-        let settings = QpSettings {
-            eps_abs: 1e-10,
-            eps_rel: 1e-10,
-            ..QpSettings::default()
-        };
+        let settings = tight();
         let full = chain_qp(60);
         // the QP without its coupling rows (every third), as before the oracle added them
         let keep: Vec<usize> = (0..full.m()).filter(|r| r % 3 != 2).collect();
@@ -918,11 +919,7 @@ mod tests {
     /// gets its own.
     #[test]
     fn symbolic_factorization_reused_for_the_same_pattern() {
-        let settings = QpSettings {
-            eps_abs: 1e-10,
-            eps_rel: 1e-10,
-            ..QpSettings::default()
-        };
+        let settings = tight();
         let a = chain_qp(40);
         let mut b = chain_qp(40);
         b.q.iter_mut().for_each(|v| *v *= 1.5);
