@@ -233,6 +233,8 @@ fn the_binary_exits_1_on_a_failure_status_with_its_outputs_written() {
 struct FailsWhenTightened {
     inner: Box<dyn QpBackend>,
     tol0: f64,
+    /// Fail with an error (the run ends with it) instead of a failed status.
+    error: bool,
 }
 
 impl QpBackend for FailsWhenTightened {
@@ -242,6 +244,13 @@ impl QpBackend for FailsWhenTightened {
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         let mut sol = self.inner.solve(qp, warm)?;
         if self.inner.tolerance().is_some_and(|t| t < self.tol0) {
+            if self.error {
+                return Err(QpError::NotFinite {
+                    what: "test: a value at the tightened tolerance",
+                    index: 0,
+                    value: f64::NAN,
+                });
+            }
             sol.status = QpStatus::NumericalError;
         }
         Ok(sol)
@@ -265,7 +274,11 @@ fn a_backend_failing_at_the_tightened_tolerance_ends_the_sqp_run_at_its_last_sta
     let scene = build(&SolidsParams::default()).unwrap();
     let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let tol0 = inner.tolerance().unwrap();
-    let mut b = FailsWhenTightened { inner, tol0 };
+    let mut b = FailsWhenTightened {
+        inner,
+        tol0,
+        error: false,
+    };
     let settings = OuterSettings {
         method: OuterMethod::Sqp,
         ..Default::default()
@@ -295,4 +308,36 @@ fn a_backend_failing_at_the_tightened_tolerance_ends_the_sqp_run_at_its_last_sta
     assert!(res.energy <= last);
     let d = min_distance(&scene.mesh, &res.x, 2.0 * scene.eps, true).distance;
     assert!(d >= scene.eps * (1.0 - 1e-12), "distance {d:e}");
+}
+
+/// A run that ends with an error after the SQP endgame tightened the backend's tolerance
+/// still gives the caller the backend back at its own tolerance.
+#[test]
+fn the_backend_tolerance_is_restored_when_the_run_ends_with_an_error() {
+    use contactlab::scene::solids::{build, SolidsParams};
+    use contactlab::solve::sqp::OuterMethod;
+    let scene = build(&SolidsParams::default()).unwrap();
+    let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+    let tol0 = inner.tolerance().unwrap();
+    let mut b = FailsWhenTightened {
+        inner,
+        tol0,
+        error: true,
+    };
+    let settings = OuterSettings {
+        method: OuterMethod::Sqp,
+        ..Default::default()
+    };
+    let err = run(
+        &scene.mesh,
+        &scene.energy,
+        scene.eps,
+        &scene.x0,
+        &mut b,
+        &settings,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("tightened tolerance"), "{err}");
+    assert_eq!(b.tolerance(), Some(tol0));
 }

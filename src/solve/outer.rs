@@ -793,8 +793,27 @@ pub fn run(
 }
 
 /// Runs the outer loop from `x0`, reporting to `observer` ([`Observer::init`] once the start
-/// is checked, [`Observer::finish`] with the result).
+/// is checked, [`Observer::finish`] with the result). The backend's tolerance, which the SQP
+/// endgame may tighten, is the caller's again afterwards, however the run ended.
 pub fn run_observed(
+    mesh: &Mesh,
+    energy: &dyn Objective,
+    eps: f64,
+    x0: &[f64],
+    backend: &mut dyn QpBackend,
+    settings: &OuterSettings,
+    observer: &mut dyn Observer<OuterLoop>,
+) -> Result<RunResult, RunError> {
+    let tolerance0 = backend.tolerance();
+    let res = outer_loop(mesh, energy, eps, x0, backend, settings, observer);
+    if let Some(t) = tolerance0 {
+        backend.set_tolerance(t);
+    }
+    res
+}
+
+/// [`run_observed`] without the restoring of the backend's tolerance.
+fn outer_loop(
     mesh: &Mesh,
     energy: &dyn Objective,
     eps: f64,
@@ -841,6 +860,12 @@ pub fn run_observed(
     let norms = H1Norms::scaled(mesh)?;
     let mut e_scale = energy_scale(energy, &x, &norms);
     let scale_floor = CERTIFICATE_SCALE_FLOOR * e_scale / norms.free.ell;
+    // The certificate at a state, from the multipliers by pair of its last sub-problem.
+    let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+    let certify = |x: &[f64], warm: &HashMap<ContactPair, f64>| {
+        certificate(mesh, energy, x, eps, active_tol, &norms, warm)
+            .map(|c| with_scale_floor(c, scale_floor))
+    };
     let hbar = median_edge_length(mesh, x0);
     let roundoff = roundoff_allowance(x0);
     let mut delta = settings.trust.delta0 * hbar;
@@ -1035,17 +1060,15 @@ pub fn run_observed(
             // (down to SQP_TOLERANCE_RANGE times the run's own).
             let progress =
                 (jprev - jx).abs() > round && step.record.step_length >= SQP_ENDGAME_MIN_STEP;
-            let tighter = backend
-                .tolerance()
-                .map(|t| (0.1 * t).max(tolerance0.unwrap_or(t) * SQP_TOLERANCE_RANGE))
-                .filter(|&t| backend.tolerance().is_some_and(|t0| t < t0 * (1.0 - 1e-9)));
+            let tighter = backend.tolerance().and_then(|now| {
+                let t = (0.1 * now).max(tolerance0.unwrap_or(now) * SQP_TOLERANCE_RANGE);
+                (t < now * (1.0 - 1e-9)).then_some(t)
+            });
             if last_sqp && (progress || tighter.is_some()) {
-                let warm = pair_multipliers(&result.last_rows, &result.multipliers);
-                let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
-                let c = with_scale_floor(
-                    certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?,
-                    scale_floor,
-                );
+                let c = certify(
+                    &x,
+                    &pair_multipliers(&result.last_rows, &result.multipliers),
+                )?;
                 let kappa = c.kappa;
                 cert_at_x = Some(c);
                 if kappa > settings.tol_kappa {
@@ -1116,16 +1139,12 @@ pub fn run_observed(
     // The certificate at the returned point, with the last sub-problem's multipliers (summed
     // per pair) as the warm start of its active set (the SQP endgame's, where it computed it
     // at that point).
-    let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
     result.certificate = match cert_at_x {
         Some(c) => c,
-        None => {
-            let warm = pair_multipliers(&result.last_rows, &result.multipliers);
-            with_scale_floor(
-                certificate(mesh, energy, &x, eps, active_tol, &norms, &warm)?,
-                scale_floor,
-            )
-        }
+        None => certify(
+            &x,
+            &pair_multipliers(&result.last_rows, &result.multipliers),
+        )?,
     };
     if let Some((x0, j0, md0, rows0, mult0, cert0)) = unpolished {
         // The polish is a step of Pantz's map from the SQP end state; where it leaves a state
@@ -1134,13 +1153,7 @@ pub fn run_observed(
         if result.certificate.kappa > settings.tol_kappa {
             let c0 = match cert0 {
                 Some(c) => c,
-                None => {
-                    let warm0 = pair_multipliers(&rows0, &mult0);
-                    with_scale_floor(
-                        certificate(mesh, energy, &x0, eps, active_tol, &norms, &warm0)?,
-                        scale_floor,
-                    )
-                }
+                None => certify(&x0, &pair_multipliers(&rows0, &mult0))?,
             };
             if c0.kappa <= settings.tol_kappa {
                 x = x0;
@@ -1165,9 +1178,6 @@ pub fn run_observed(
         } else {
             RunStatus::FixedPoint
         };
-    }
-    if let Some(t) = tolerance0 {
-        backend.set_tolerance(t);
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();
