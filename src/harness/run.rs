@@ -191,7 +191,10 @@ fn parse_curvature(s: &str) -> Result<String, String> {
     Curvature::from_name(s)
         .map(|c| c.as_str().to_string())
         .ok_or_else(|| {
-            format!("--sqp-curvature {s:?}: expected one of off, psd, full, tangent, interior")
+            format!(
+                "--sqp-curvature {s:?}: expected one of {}",
+                Curvature::names()
+            )
         })
 }
 
@@ -387,6 +390,9 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
         "trust_delta0" => anyhow!("--trust-delta0 must be finite and > 0, got {v}"),
         "time_limit_s" => anyhow!("--time-limit must be > 0 seconds, got {v}"),
         "tol_j" => anyhow!("--tol-j must be > 0, got {v}"),
+        "sqp_normal_stiffness" => {
+            anyhow!("--sqp-normal-stiffness must be finite and >= 0, got {v}")
+        }
         _ => e.into(),
     })
 }

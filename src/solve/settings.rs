@@ -130,7 +130,8 @@ pub struct RunSettings {
     pub outer_method: OuterMethod,
     /// The SQP model's constraint curvature (`--sqp-curvature`; sqp only).
     pub sqp_curvature: Curvature,
-    /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`).
+    /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`; finite,
+    /// ≥ 0).
     pub sqp_normal_stiffness: f64,
 }
 
@@ -191,7 +192,7 @@ impl std::fmt::Display for Rule {
 #[error("{key} = {value}: {rule}")]
 pub struct SettingsError {
     /// The key: `backend`, `qp_tol`, `max_outer`, `max_inner`, `lazy_start`, `trust_delta0`,
-    /// `time_limit_s` or `tol_j`.
+    /// `time_limit_s`, `tol_j` or `sqp_normal_stiffness`.
     pub key: &'static str,
     /// The value, printed (a backend name quoted).
     pub value: String,
@@ -201,7 +202,8 @@ pub struct SettingsError {
 
 impl RunSettings {
     /// Checks every key, naming the first bad one (in the order of the fields' checks:
-    /// backend, qp_tol, max_outer, max_inner, lazy_start, trust_delta0, time_limit_s, tol_j).
+    /// backend, qp_tol, max_outer, max_inner, lazy_start, trust_delta0, time_limit_s, tol_j,
+    /// sqp_normal_stiffness).
     pub fn validate(&self) -> Result<(), SettingsError> {
         let err = |key, value: String, rule| Err(SettingsError { key, value, rule });
         let finite_pos = |v: f64| v > 0.0 && v.is_finite();
@@ -236,6 +238,14 @@ impl RunSettings {
         }
         if let Some(t) = self.tol_j.filter(|&t| !finite_pos(t)) {
             return err("tol_j", t.to_string(), Rule::FinitePositive);
+        }
+        let g = self.sqp_normal_stiffness;
+        if !(g >= 0.0 && g.is_finite()) {
+            return err(
+                "sqp_normal_stiffness",
+                g.to_string(),
+                Rule::FiniteNonNegative,
+            );
         }
         Ok(())
     }
@@ -341,6 +351,14 @@ mod tests {
         assert_eq!(
             bad(&|s| s.time_limit_s = Some(0.0)),
             "time_limit_s = 0: must be > 0"
+        );
+        assert_eq!(
+            bad(&|s| s.sqp_normal_stiffness = -0.5),
+            "sqp_normal_stiffness = -0.5: must be finite and ≥ 0"
+        );
+        assert_eq!(
+            bad(&|s| s.sqp_normal_stiffness = f64::NAN),
+            "sqp_normal_stiffness = NaN: must be finite and ≥ 0"
         );
         let s: RunSettings = toml::from_str("backend = \"uzawa\"\naccuracy = \"high\"").unwrap();
         assert_eq!((s.backend.as_str(), s.accuracy), ("uzawa", Accuracy::High));

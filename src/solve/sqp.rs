@@ -181,6 +181,11 @@ impl Curvature {
     pub fn from_name(s: &str) -> Option<Curvature> {
         Curvature::ALL.into_iter().find(|m| m.as_str() == s)
     }
+
+    /// The names, for messages: `off, psd, full, tangent, interior`.
+    pub fn names() -> String {
+        Curvature::ALL.map(|m| m.as_str()).join(", ")
+    }
 }
 
 impl Default for SqpSettings {
