@@ -512,6 +512,61 @@ fn dynamics_cli_run_directory_and_bad_input() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `contactlab run collide --dynamic --outer-method sqp` honours `--sqp-curvature` and
+/// `--sqp-normal-stiffness`: `summary.json` records them under `settings.sqp`, as a static
+/// run's does, and each changes the steps (history.csv, timing aside) against a run with the
+/// defaults.
+#[test]
+fn dynamics_cli_sqp_curvature_and_normal_stiffness_reach_the_steps_and_the_summary() {
+    let bin = env!("CARGO_BIN_EXE_contactlab");
+    let dir = std::env::temp_dir().join(format!("contactlab_dyn_sqp_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    // 8 steps of 0.01 at n = 16: the rings meet at step 5
+    let run = |name: &str, flags: &[&str]| -> (serde_json::Value, Vec<String>) {
+        let out = dir.join(name);
+        let o = std::process::Command::new(bin)
+            .args(["run", "collide", "--dynamic", "--n", "16", "--dt", "0.01"])
+            .args(["--steps", "8", "--outer-method", "sqp", "--quiet", "--out"])
+            .arg(&out)
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        // every column of history.csv but the last, wall_time_s
+        let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
+        assert!(hist.lines().next().unwrap().ends_with(",wall_time_s"));
+        let rows = hist
+            .lines()
+            .map(|l| l[..l.rfind(',').unwrap()].to_string())
+            .collect();
+        (summary, rows)
+    };
+    let (off, h_off) = run("off", &[]);
+    let (psd, h_psd) = run("psd", &["--sqp-curvature", "psd"]);
+    let (gamma, h_gamma) = run("gamma", &["--sqp-normal-stiffness", "0.5"]);
+    let sqp = |s: &serde_json::Value| {
+        assert_eq!(s["settings"]["method"], "sqp");
+        assert_eq!(s["metrics"]["all_admissible"], true);
+        (
+            s["settings"]["sqp"]["curvature"]
+                .as_str()
+                .unwrap()
+                .to_string(),
+            s["settings"]["sqp"]["normal_stiffness"].as_f64().unwrap(),
+        )
+    };
+    assert_eq!(sqp(&off), ("off".to_string(), 0.0));
+    assert_eq!(sqp(&psd), ("psd".to_string(), 0.0));
+    assert_eq!(sqp(&gamma), ("off".to_string(), 0.5));
+    assert_eq!(h_off.len(), 1 + 9);
+    assert_ne!(h_psd, h_off, "--sqp-curvature psd changed no step");
+    assert_ne!(h_gamma, h_off, "--sqp-normal-stiffness 0.5 changed no step");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Every step's certificate reaches the dynamic summary: a step is `converged` exactly where
 /// its κ is within `tol_κ` and `fixed_point` where it is not, the metrics count the latter and
 /// take the largest κ, and the SQP counts add up to the outer iterations under

@@ -42,6 +42,8 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         max_inner: None,
         newton_model: Default::default(),
         outer_method: Default::default(),
+        sqp_curvature: Default::default(),
+        sqp_normal_stiffness: 0.0,
         time_limit_s: None,
     };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();

@@ -15,7 +15,7 @@ use crate::solve::dynamics::{
 use crate::solve::observer::Observer;
 use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResult, RunStatus};
 use crate::solve::settings::{tol_kappa, Accuracy};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::Result;
 use contactlab_solvers::{backend_from_name, QpBackend, QpSettings, DEFAULT_BACKEND};
 use std::time::Instant;
@@ -43,6 +43,11 @@ pub struct CaseSettings {
     pub newton_model: HessianModel,
     /// The outer method.
     pub outer_method: OuterMethod,
+    /// The SQP model's constraint curvature (used by `outer_method` sqp).
+    pub sqp_curvature: Curvature,
+    /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0; used by `outer_method`
+    /// sqp).
+    pub sqp_normal_stiffness: f64,
 }
 
 /// A finished case.
@@ -112,9 +117,9 @@ pub fn lemma_diagnostics_with(
 }
 
 /// The outer-loop settings of a case, static or dynamic: the preset's tol_J unless overridden
-/// (and the certificate's tolerance √tol_J), the backend's tolerance, max_outer, pruning and
-/// max_inner (the time limit is a static run's, set by
-/// [`execute_with`]).
+/// (and the certificate's tolerance √tol_J), the backend's tolerance, max_outer, pruning,
+/// max_inner, the Newton model, the outer method and the SQP model's curvature and normal
+/// stiffness (the time limit is a static run's, set by [`execute_with`]).
 pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     let tol_j = cs.tol_j.unwrap_or(cs.accuracy.tol_j());
     let mut settings = OuterSettings {
@@ -130,6 +135,8 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     }
     settings.inner.hessian_model = cs.newton_model;
     settings.method = cs.outer_method;
+    settings.sqp.curvature = cs.sqp_curvature;
+    settings.sqp.normal_stiffness = cs.sqp_normal_stiffness;
     settings
 }
 

@@ -175,6 +175,8 @@ fn run_prepared(
         time_limit_s: None,
         newton_model: rs.hessian_model,
         outer_method: rs.outer_method,
+        sqp_curvature: rs.sqp_curvature,
+        sqp_normal_stiffness: rs.sqp_normal_stiffness,
     };
     let qps = rs.qp_settings();
     let out = a
@@ -287,6 +289,7 @@ fn run_prepared(
             max_outer: cs.max_outer,
             pruning: cs.pruning,
             method: cs.outer_method,
+            sqp: case::outer_settings(&cs).sqp,
             ..Default::default()
         },
     };

@@ -71,6 +71,8 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         max_inner: None,
         newton_model: Default::default(),
         outer_method: Default::default(),
+        sqp_curvature: Default::default(),
+        sqp_normal_stiffness: 0.0,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

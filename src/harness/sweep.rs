@@ -532,6 +532,8 @@ impl BlockSettings {
             time_limit_s: self.time_limit_s,
             newton_model: self.newton_model.unwrap_or_default(),
             outer_method: self.outer_method,
+            sqp_curvature: Default::default(),
+            sqp_normal_stiffness: 0.0,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -825,6 +827,10 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         max_inner: None,
         newton_model: Default::default(),
         outer_method: spec.settings.outer_method,
+        // the default SQP model, as the default Newton model: a reference is solved once per
+        // group, whichever model its group's runs use
+        sqp_curvature: Default::default(),
+        sqp_normal_stiffness: 0.0,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,
