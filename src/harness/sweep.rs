@@ -23,7 +23,7 @@ use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
 use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{bail, Context, Result};
 use contactlab_solvers::{BACKEND_NAMES, DEFAULT_BACKEND};
 use rayon::prelude::*;
@@ -192,6 +192,12 @@ pub struct Common {
     pub newton_model: Option<String>,
     /// The outer method: `pantz` or `sqp` (default: [`OuterMethod::default`]).
     pub outer_method: Option<String>,
+    /// The SQP model's constraint curvature: `off` (default), `psd`, `full`, `tangent` or
+    /// `interior` (with `outer_method = "sqp"` only).
+    pub sqp_curvature: Option<String>,
+    /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0, default 0; with
+    /// `outer_method = "sqp"` only).
+    pub sqp_normal_stiffness: Option<f64>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -389,6 +395,8 @@ struct BlockSettings {
     time_limit_s: Option<f64>,
     newton_model: Option<HessianModel>,
     outer_method: OuterMethod,
+    sqp_curvature: Curvature,
+    sqp_normal_stiffness: f64,
     reference: Option<ReferenceSpec>,
 }
 
@@ -438,6 +446,19 @@ impl BlockSettings {
                 )
             })?,
         };
+        let sqp_curvature = match c.sqp_curvature.as_ref().or(defaults.sqp_curvature.as_ref()) {
+            None => Curvature::default(),
+            Some(m) => Curvature::from_name(m).with_context(|| {
+                format!(
+                    "{at}: sqp_curvature {m:?}: expected one of {}",
+                    Curvature::names()
+                )
+            })?,
+        };
+        let sqp_normal_stiffness = c
+            .sqp_normal_stiffness
+            .or(defaults.sqp_normal_stiffness)
+            .unwrap_or(0.0);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -451,6 +472,7 @@ impl BlockSettings {
                 max_outer,
                 max_inner: max_inner.unwrap_or(RunSettings::default().max_inner),
                 time_limit_s,
+                sqp_normal_stiffness,
                 ..RunSettings::default()
             };
             if let Err(e) = rs.validate() {
@@ -465,6 +487,23 @@ impl BlockSettings {
                     ),
                     _ => bail!("{at}: {} = {} {}", e.key, e.value, e.rule),
                 }
+            }
+        }
+        if outer_method != OuterMethod::Sqp {
+            let set: Vec<&str> = [
+                ("sqp_curvature", sqp_curvature != Curvature::default()),
+                ("sqp_normal_stiffness", sqp_normal_stiffness != 0.0),
+            ]
+            .into_iter()
+            .filter_map(|(k, set)| set.then_some(k))
+            .collect();
+            if !set.is_empty() {
+                bail!(
+                    "{at}: {} set with outer_method = {:?}: sqp_curvature and \
+                     sqp_normal_stiffness apply to outer_method = \"sqp\" only",
+                    set.join(" and "),
+                    outer_method.as_str()
+                );
             }
         }
         if time_limit_s.is_some() && b.dynamic {
@@ -505,6 +544,8 @@ impl BlockSettings {
             time_limit_s,
             newton_model,
             outer_method,
+            sqp_curvature,
+            sqp_normal_stiffness,
             reference,
         })
     }
@@ -532,8 +573,8 @@ impl BlockSettings {
             time_limit_s: self.time_limit_s,
             newton_model: self.newton_model.unwrap_or_default(),
             outer_method: self.outer_method,
-            sqp_curvature: Default::default(),
-            sqp_normal_stiffness: 0.0,
+            sqp_curvature: self.sqp_curvature,
+            sqp_normal_stiffness: self.sqp_normal_stiffness,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -554,13 +595,13 @@ impl BlockSettings {
 
 /// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
-/// model other than the default and an outer method other than `pantz` only when set, so that
-/// the keys of sweeps without them (and of every run made before the SQP method) stay as they
-/// were.
+/// model other than the default, an outer method other than `pantz`, an SQP curvature other
+/// than `off` and an SQP normal stiffness other than 0 only when set, so that the keys of
+/// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -585,6 +626,16 @@ fn run_key(spec: &RunSpec) -> String {
             String::new()
         } else {
             format!("|method={}", s.outer_method.as_str())
+        },
+        if s.sqp_curvature == Curvature::default() {
+            String::new()
+        } else {
+            format!("|curvature={}", s.sqp_curvature.as_str())
+        },
+        if s.sqp_normal_stiffness == 0.0 {
+            String::new()
+        } else {
+            format!("|gamma={:?}", s.sqp_normal_stiffness)
         }
     )
 }
@@ -1114,6 +1165,160 @@ mod tests {
         let m = err("[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"newton\"");
         assert!(
             m.contains("outer_method \"newton\"") && m.contains("pantz, sqp"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn sweep_sqp_model_keys_reach_the_settings_and_the_key_only_when_set() {
+        let ring = |extra: &str| parse(&format!("[[scene]]\nname = \"ring\"\nn = [20]\n{extra}"));
+        let plain = "ring|n=20|eps=0.1*h^1.0||clarabel|default|lazy|tolj=preset|max=2000";
+        // unset, or set to the defaults: the settings' defaults and the key as it was
+        for extra in [
+            "",
+            "outer_method = \"sqp\"",
+            "outer_method = \"sqp\"\nsqp_curvature = \"off\"\nsqp_normal_stiffness = 0.0",
+            "sqp_curvature = \"off\"\nsqp_normal_stiffness = 0",
+        ] {
+            let runs = ring(extra).unwrap();
+            let s = &runs[0].settings;
+            assert_eq!(
+                (s.sqp_curvature, s.sqp_normal_stiffness),
+                (Curvature::Off, 0.0)
+            );
+            let want = if extra.contains("sqp\"") {
+                format!("{plain}|method=sqp")
+            } else {
+                plain.to_string()
+            };
+            assert_eq!(runs[0].key, want, "{extra:?}");
+            let o = case::outer_settings(s);
+            assert_eq!(
+                (o.sqp.curvature, o.sqp.normal_stiffness),
+                (Curvature::Off, 0.0)
+            );
+        }
+        // set: in the settings, the outer settings and the key (after the method)
+        let runs =
+            ring("outer_method = \"sqp\"\nsqp_curvature = \"psd\"\nsqp_normal_stiffness = 0.01")
+                .unwrap();
+        let s = &runs[0].settings;
+        assert_eq!(
+            (s.sqp_curvature, s.sqp_normal_stiffness),
+            (Curvature::Psd, 0.01)
+        );
+        let o = case::outer_settings(s);
+        assert_eq!(
+            (o.sqp.curvature, o.sqp.normal_stiffness),
+            (Curvature::Psd, 0.01)
+        );
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|curvature=psd|gamma=0.01")
+        );
+        let runs = ring("outer_method = \"sqp\"\nsqp_normal_stiffness = 1").unwrap();
+        assert_eq!(runs[0].key, format!("{plain}|method=sqp|gamma=1.0"));
+        // a block overrides the defaults, key by key
+        let runs = parse(
+            "[defaults]\nouter_method = \"sqp\"\nsqp_curvature = \"full\"\n\
+             sqp_normal_stiffness = 0.5\n\
+             [[scene]]\nname = \"ring\"\nn = [20]\n\
+             [[scene]]\nname = \"ring\"\nn = [24]\nsqp_curvature = \"tangent\"\n\
+             [[scene]]\nname = \"ring\"\nn = [28]\nsqp_curvature = \"off\"\n\
+             sqp_normal_stiffness = 0.0\n",
+        )
+        .unwrap();
+        let got: Vec<(Curvature, f64)> = runs
+            .iter()
+            .map(|r| (r.settings.sqp_curvature, r.settings.sqp_normal_stiffness))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (Curvature::Full, 0.5),
+                (Curvature::Tangent, 0.5),
+                (Curvature::Off, 0.0)
+            ]
+        );
+        assert!(runs[0]
+            .key
+            .ends_with("|method=sqp|curvature=full|gamma=0.5"));
+        assert!(runs[1]
+            .key
+            .ends_with("|method=sqp|curvature=tangent|gamma=0.5"));
+        assert!(
+            runs[2].key.ends_with("|max=2000|method=sqp"),
+            "{}",
+            runs[2].key
+        );
+        // dynamic blocks take them too
+        let runs = parse(
+            "[[scene]]\nname = \"collide\"\ndynamic = true\nn = [16]\nsteps = 2\n\
+             outer_method = \"sqp\"\nsqp_curvature = \"interior\"\n",
+        )
+        .unwrap();
+        assert_eq!(runs[0].settings.sqp_curvature, Curvature::Interior);
+        assert!(
+            runs[0].key.ends_with("|method=sqp|curvature=interior"),
+            "{}",
+            runs[0].key
+        );
+        // bad values name the block and the key
+        let err = |extra: &str| format!("{:#}", ring(extra).expect_err(extra));
+        let m = err("outer_method = \"sqp\"\nsqp_curvature = \"hessian\"");
+        assert!(
+            m.contains("scene block 1 (ring): sqp_curvature \"hessian\"")
+                && m.contains("off, psd, full, tangent, interior"),
+            "{m}"
+        );
+        let m = parse(
+            "[defaults]\nouter_method = \"sqp\"\nsqp_curvature = \"PSD\"\n\
+             [[scene]]\nname = \"ring\"\nn = [20]",
+        )
+        .map(|_| ())
+        .unwrap_err();
+        assert!(format!("{m:#}").contains("scene block 1 (ring): sqp_curvature \"PSD\""));
+        for (g, shown) in [("-0.5", "-0.5"), ("nan", "NaN"), ("inf", "inf")] {
+            let m = err(&format!(
+                "outer_method = \"sqp\"\nsqp_normal_stiffness = {g}"
+            ));
+            assert!(
+                m.contains(&format!(
+                    "scene block 1 (ring): sqp_normal_stiffness = {shown} must be finite and ≥ 0"
+                )),
+                "{m}"
+            );
+        }
+        // with pantz (given, or the default) they are an error naming the key and sqp
+        for extra in [
+            "outer_method = \"pantz\"\nsqp_curvature = \"psd\"",
+            "sqp_curvature = \"psd\"",
+        ] {
+            let m = err(extra);
+            assert!(
+                m.contains("scene block 1 (ring): sqp_curvature set with outer_method = \"pantz\"")
+                    && m.contains("apply to outer_method = \"sqp\" only"),
+                "{m}"
+            );
+        }
+        let m = err("sqp_normal_stiffness = 0.01");
+        assert!(
+            m.contains("sqp_normal_stiffness set with outer_method = \"pantz\""),
+            "{m}"
+        );
+        // the defaults' sqp settings with a block that goes back to pantz
+        let m = parse(
+            "[defaults]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
+             sqp_normal_stiffness = 0.1\n[[scene]]\nname = \"ring\"\nn = [20]\n\
+             [[scene]]\nname = \"ring\"\nn = [24]\nouter_method = \"pantz\"",
+        )
+        .map(|_| ())
+        .unwrap_err();
+        let m = format!("{m:#}");
+        assert!(
+            m.contains(
+                "scene block 2 (ring): sqp_curvature and sqp_normal_stiffness set with outer_method = \"pantz\""
+            ),
             "{m}"
         );
     }
