@@ -123,6 +123,24 @@ const CORPUS: &[(&str, &[&str])] = &[
         "solver_bad_outer_method.toml",
         &[":4:", "solver.outer_method", "\"newton\"", "pantz, sqp"],
     ),
+    (
+        "solver_bad_sqp_curvature.toml",
+        &[
+            ":4:",
+            "solver.sqp_curvature",
+            "\"hessian\"",
+            "off, psd, full, tangent, interior",
+        ],
+    ),
+    (
+        "solver_bad_sqp_normal_stiffness.toml",
+        &[
+            ":4:",
+            "solver.sqp_normal_stiffness",
+            "-0.5",
+            "must be finite and ≥ 0",
+        ],
+    ),
     ("unknown_body_key.toml", &[":19:", "unknown field `colour`"]),
     ("unknown_contact_body.toml", &["contact.pairs", "\"uper\""]),
     ("unknown_key.toml", &[":3:", "unknown field `epsilon`"]),
@@ -520,4 +538,78 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted");
     assert_eq!(s["outer_method"], "pantz");
     assert_eq!(s["sqp_steps"], 0);
+}
+
+#[test]
+fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
+    // good_strings.toml (static) and dynamic_string.toml (--dynamic), each with a [solver]
+    // table that sets the SQP model; summary.json says which values were used
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("solver_sqp_keys");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
+                  sqp_normal_stiffness = 0.01\n\n";
+    for name in ["good_strings.toml", "dynamic_string.toml"] {
+        let src = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/data")
+                .join(name),
+        )
+        .unwrap();
+        // [solver] before the first table (the top-level keys stay first)
+        let a = src.find("\n[").unwrap() + 1;
+        std::fs::write(
+            dir.join(name),
+            format!("{}{}{}", &src[..a], solver, &src[a..]),
+        )
+        .unwrap();
+    }
+    let summary = |name: &str, flags: &[&str]| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+            .arg("run")
+            .arg(dir.join(name))
+            .args(["--quiet", "--out"])
+            .arg(dir.join("run"))
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name} {flags:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(dir.join("run/summary.json")).unwrap())
+            .unwrap()
+    };
+    let sqp = |s: &serde_json::Value| {
+        assert_eq!(s["settings"]["method"], "sqp");
+        (
+            s["settings"]["sqp"]["curvature"]
+                .as_str()
+                .unwrap()
+                .to_string(),
+            s["settings"]["sqp"]["normal_stiffness"].as_f64().unwrap(),
+        )
+    };
+    for (name, dynamic) in [
+        ("good_strings.toml", &[][..]),
+        ("dynamic_string.toml", &["--dynamic"][..]),
+    ] {
+        // the file's values
+        assert_eq!(sqp(&summary(name, dynamic)), ("psd".into(), 0.01), "{name}");
+        // a flag given on the command line wins, even at its default value; the other key
+        // still comes from the file
+        let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
+        assert_eq!(sqp(&summary(name, &flags)), ("off".into(), 0.01), "{name}");
+        let flags = [
+            dynamic,
+            &["--sqp-curvature", "tangent", "--sqp-normal-stiffness", "0"],
+        ]
+        .concat();
+        assert_eq!(
+            sqp(&summary(name, &flags)),
+            ("tangent".into(), 0.0),
+            "{name}"
+        );
+    }
 }

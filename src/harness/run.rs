@@ -337,6 +337,18 @@ fn scene_from_file(
             settings.hessian_model = parse_newton_model(m).map_err(anyhow::Error::msg)?;
         }
     }
+    if !explicit("sqp_curvature") {
+        if let Some(c) = &s.sqp_curvature {
+            settings.sqp_curvature = Curvature::from_name(c).ok_or_else(|| {
+                anyhow!(
+                    "{}: solver.sqp_curvature {c:?}: expected one of {}",
+                    a.scene,
+                    Curvature::names()
+                )
+            })?;
+        }
+    }
+    from_file!("sqp_normal_stiffness", sqp_normal_stiffness);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,

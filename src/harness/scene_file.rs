@@ -2,7 +2,8 @@
 //! ([`crate::scene::file::load_with`]) with the solver's rules for the file's `[solver]` and
 //! `[dynamics]` tables ([`SolveRules`]). The scene stage holds those tables as plain data and
 //! does not import the solver; the checks that need the solver's vocabulary (backend names,
-//! accuracy presets, [`RunSettings::validate`], time-stepping schemes) are here, and run while
+//! accuracy presets, outer methods, the SQP model's curvature modes, [`RunSettings::validate`],
+//! time-stepping schemes) are here, and run while
 //! the file loads, at the place the scene file's other checks give them (after `dim`, `eps`
 //! and `gravity`, before the bodies). [`pruning`] and [`pruning_name`] map the file's pruning
 //! names to the solver's modes and back.
@@ -14,7 +15,7 @@ use crate::scene::file::{
 use crate::solve::dynamics::Scheme;
 use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
-use crate::solve::sqp::OuterMethod;
+use crate::solve::sqp::{Curvature, OuterMethod};
 use std::path::Path;
 
 /// Reads, checks and builds a scene file for a run: [`crate::scene::file::load_with`] with
@@ -57,6 +58,15 @@ impl RunRules for SolveRules {
                     key: "outer_method".into(),
                     value: format!("{m:?}"),
                     reason: format!("expected one of {}", OuterMethod::names()),
+                });
+            }
+        }
+        if let Some(c) = &s.sqp_curvature {
+            if Curvature::from_name(c).is_none() {
+                return Err(Refusal {
+                    key: "sqp_curvature".into(),
+                    value: format!("{c:?}"),
+                    reason: format!("expected one of {}", Curvature::names()),
                 });
             }
         }
@@ -144,6 +154,12 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     {
         s.outer_method = m;
     }
+    if let Some(c) = spec.sqp_curvature.as_deref().and_then(Curvature::from_name) {
+        s.sqp_curvature = c;
+    }
+    if let Some(v) = spec.sqp_normal_stiffness {
+        s.sqp_normal_stiffness = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }
@@ -190,6 +206,25 @@ mod tests {
         })
         .unwrap_err();
         assert_eq!(e.key, "tol_j");
+        let e = solver(&|s| s.sqp_curvature = Some("hessian".into())).unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.value.as_str(), e.reason.as_str()),
+            (
+                "sqp_curvature",
+                "\"hessian\"",
+                "expected one of off, psd, full, tangent, interior"
+            )
+        );
+        let e = solver(&|s| s.sqp_normal_stiffness = Some(-1.0)).unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.value.as_str(), e.reason.as_str()),
+            ("sqp_normal_stiffness", "-1", "must be finite and ≥ 0")
+        );
+        let ok = solver(&|s| {
+            s.sqp_curvature = Some("psd".into());
+            s.sqp_normal_stiffness = Some(0.01);
+        });
+        assert_eq!(ok, Ok(()));
         let e = solver(&|s| s.accuracy = Some("bogus".into())).unwrap_err();
         assert_eq!(
             (e.key.as_str(), e.value.as_str(), e.reason.as_str()),

@@ -38,6 +38,12 @@ pub struct SolverSpec {
     pub newton_model: Option<String>,
     /// The outer method: `pantz` or `sqp`.
     pub outer_method: Option<String>,
+    /// The SQP model's constraint curvature: `off`, `psd`, `full`, `tangent` or `interior`
+    /// (used with `outer_method = "sqp"`).
+    pub sqp_curvature: Option<String>,
+    /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0; used with
+    /// `outer_method = "sqp"`).
+    pub sqp_normal_stiffness: Option<f64>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
