@@ -339,8 +339,11 @@ pub fn point_key(pair: ContactPair) -> usize {
 /// keeps what it keeps applied once to the whole.
 fn keep_most_violated(rows: &mut Vec<PairRows>, phi: &[f64]) {
     use std::collections::hash_map::Entry;
-    let mut best: std::collections::HashMap<usize, (f64, usize)> =
-        std::collections::HashMap::with_capacity(rows.len());
+    let mut best: std::collections::HashMap<usize, (f64, usize), _> =
+        std::collections::HashMap::with_capacity_and_hasher(
+            rows.len(),
+            std::hash::BuildHasherDefault::<super::PairHasher>::default(),
+        );
     for (i, r) in rows.iter().enumerate() {
         let v = r.min_value(phi);
         match best.entry(point_key(r.pair)) {

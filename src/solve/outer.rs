@@ -10,10 +10,10 @@
 //! frames or a progress line.
 
 use crate::contact::motion::{point_key, AnyMotionSearch};
-use crate::contact::MinDistance;
 use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
 };
+use crate::contact::{MinDistance, PairSet};
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{certificate, Certificate, CertificateError};
@@ -26,7 +26,7 @@ use crate::solve::subproblem::{
 };
 use contactlab_solvers::{QpBackend, QpError, QpStatus};
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -429,11 +429,11 @@ fn lazy_oracle<'a>(
     psi: &'a [f64],
     eps_qp: f64,
 ) -> impl FnMut(&[f64], &[PairRows]) -> Vec<PairRows> + 'a {
-    let mut carried: HashSet<ContactPair> = HashSet::new();
+    let mut carried = PairSet::default();
     let mut search: Option<AnyMotionSearch> = None;
     move |phi: &[f64], rows: &[PairRows]| {
         if carried.len() != rows.len() {
-            carried = rows.iter().map(|r| r.pair).collect();
+            carried = rows.iter().map(|r| r.pair).collect::<PairSet>();
         }
         let search = search.get_or_insert_with(|| AnyMotionSearch::new(mesh, psi));
         // Per point (or first edge), only the most violated pair: the QP solved again with

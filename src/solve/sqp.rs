@@ -56,7 +56,9 @@
 use crate::contact::continuous::first_contact;
 use crate::contact::hessian::pair_hessian;
 use crate::contact::motion::AnyMotionSearch;
-use crate::contact::{min_distance, near_pairs, pair_rows, ContactPair, MinDistance, PairRows};
+use crate::contact::{
+    min_distance, near_pairs, pair_rows, ContactPair, MinDistance, PairRows, PairSet,
+};
 use crate::energy::Objective;
 use crate::scene::mesh::Mesh;
 use crate::solve::certificate::gradient_entries;
@@ -64,7 +66,7 @@ use crate::solve::outer::most_violated_per_point;
 use crate::solve::qp_units::solve_in_units;
 use crate::solve::subproblem::{build_qp_with, DofMap, InnerSettings, ModelShift};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpSolution, QpStatus, WarmStart};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// Which outer method the run uses (docs/method.md).
@@ -522,7 +524,7 @@ pub(crate) fn sqp_step(
         .into_iter()
         .filter_map(|p| pair_rows(mesh, x, p))
         .collect();
-    let mut carried: HashSet<ContactPair> = rows.iter().map(|r| r.pair).collect();
+    let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
     // The constraints' curvature with the last step's multipliers (none at the first step).
@@ -636,7 +638,7 @@ pub(crate) fn sqp_step(
             let mut fix: Vec<PairRows> = Vec::new();
             let mut close = false;
             let mut crossed = false;
-            let mut seen: HashSet<ContactPair> = HashSet::new();
+            let mut seen = PairSet::default();
             let near = search.candidates(mesh, x, &z, trigger);
             for p in rows.iter().map(|r| r.pair).chain(near) {
                 if !seen.insert(p) {
