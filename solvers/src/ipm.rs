@@ -34,9 +34,32 @@
 //! Cold: `min ½xᵀPx + qᵀx + ½|Gx − h|²` subject to `E x = b`, then slacks and duals shifted
 //! positive by Mehrotra's heuristic. With a warm start's duals `y` (the previous inner QP's,
 //! or the same QP before lazy rows were added, new rows at 0): `z` from `y`, `x` the minimizer
-//! of the Lagrangian `½xᵀPx + qᵀx − zᵀ(Gx − h)` plus `½|g_j x − h_j|²` over the rows with
-//! `z_j > 0`, subject to `E x = b` (at an exact solution this is its `x`), then the same
-//! shifts. A warm start's `x` is not used.
+//! of the Lagrangian `½xᵀPx + qᵀx − zᵀ(Gx − h)` plus `½|g_j x − h_j|²` over the rows that hold
+//! a dual, `z_j > WARM_DUAL_REL · max z` (an interior-point solution leaves every dual
+//! positive, the rows far from binding at about `μ/s_j`), subject to `E x = b` (at an exact
+//! solution this is its `x`), then the same shifts. A warm start's `x` is not used.
+//!
+//! # Constraint reduction
+//!
+//! Most rows of a contact QP end far from binding (balloons n = 1600: about 7 600 of 54 000
+//! rows hold a dual at the solution), yet every row couples its vertices in `K`: rows the lazy
+//! oracle added for a long step couple vertices many edges apart, and the factor `L` of the
+//! full `K` had 24 times the entries of the factor of `P` plus the binding rows alone. So each
+//! iteration factorizes a reduced matrix instead, built from the rows whose weight is not
+//! negligible, `D_jj |g_j|² ≥ REDUCE_BELOW · min_c P_cc` over the row's columns `c` (a row
+//! with a smaller weight moves its vertices' stiffness by less than that fraction), in the
+//! manner of the constraint-reduced interior-point methods of Tits et al. (J. Optim. Theory
+//! Appl., 2006; for QPs, Jung, O'Leary and Tits, Comput. Optim. Appl., 2008). The direction
+//! is still the Newton direction of the whole QP: the refinement above runs against the full
+//! Newton system (every row), with the reduced factorization as its solver, for up to
+//! `REDUCED_REFINE` steps until the residual is below `REDUCED_REFINE_REL` of the right-hand
+//! side (or `REFINE_BELOW·eps_abs`). If it does not get there (the rows are not yet
+//! separated: it stalls or grows), the iteration factorizes the full `K` as before, and so do
+//! the next `REDUCE_PAUSE`. Reduction is skipped while more than `REDUCE_MAX_FRACTION` of the
+//! rows would be in it. The reduced matrices' symbolic factorizations are cached like the
+//! full one's; the full `K` is only assembled when an iteration needs it. The warm start's
+//! first system holds exactly the rows with a dual, so it is reduced already.
+//! [`IpBackend::without_reduction`] factorizes the full `K` at every iteration.
 //!
 //! Unlike the KKT form of a general interior-point code (`n + m` unknowns), this system has
 //! `n + m_E` unknowns: for the contact QPs of the sub-problems, whose rows touch two or three
@@ -70,6 +93,30 @@ use std::time::Instant;
 /// this fraction of `eps_abs`: a thousandth of what the termination tests can see.
 const REFINE_BELOW: f64 = 1e-3;
 
+/// Constraint reduction: a row joins the reduced matrix once its weight `d_j |g_j|²` reaches
+/// this fraction of the smallest diagonal entry of `P` over its columns.
+const REDUCE_BELOW: f64 = 1e-3;
+
+/// Constraint reduction is given up for a QP once more than this fraction of its rows is in
+/// the reduced matrix.
+const REDUCE_MAX_FRACTION: f64 = 0.5;
+
+/// After a reduced matrix that was not enough, this many iterations use the full one.
+const REDUCE_PAUSE: usize = 2;
+
+/// Refinement steps of the predictor's and the corrector's direction with the reduced matrix.
+const REDUCED_REFINE_PREDICTOR: usize = 2;
+const REDUCED_REFINE: usize = 8;
+
+/// With the reduced matrix, the corrector's direction is accepted once the Newton system's
+/// residual is below this fraction of its right-hand side (or below `REFINE_BELOW·eps_abs`),
+/// and refinement stops when a step reduces the residual by less than `REDUCED_STALL`.
+const REDUCED_REFINE_REL: f64 = 1e-7;
+const REDUCED_STALL: f64 = 0.5;
+
+/// A warm start's dual counts as held when above this fraction of the largest.
+const WARM_DUAL_REL: f64 = 1e-6;
+
 /// Most interior-point iterations, whatever `max_iter` allows.
 const MAX_IP_ITERATIONS: usize = 200;
 
@@ -79,6 +126,17 @@ pub struct IpBackend {
     settings: QpSettings,
     /// The last QP's pattern and symbolic factorization (module documentation).
     symbolic: Option<SymbolicCache>,
+    /// The same for the reduced matrices (module documentation, "Constraint reduction").
+    symbolic_reduced: Option<SymbolicCache>,
+    /// Constraint reduction on (the default) or off.
+    reduction: bool,
+    /// Iterations that factorized a reduced matrix, and those of them whose reduced matrix
+    /// did not give the Newton direction (the full one was factorized instead), since the
+    /// backend was made.
+    reduced_iterations: usize,
+    reduction_fallbacks: usize,
+    /// Solves done again without reduction (their first attempt did not end `Solved`).
+    reduction_retries: usize,
 }
 
 impl IpBackend {
@@ -87,7 +145,32 @@ impl IpBackend {
         IpBackend {
             settings,
             symbolic: None,
+            symbolic_reduced: None,
+            reduction: true,
+            reduced_iterations: 0,
+            reduction_fallbacks: 0,
+            reduction_retries: 0,
         }
+    }
+
+    /// The backend without constraint reduction (every iteration factorizes the full
+    /// condensed matrix).
+    pub fn without_reduction(settings: QpSettings) -> Self {
+        IpBackend {
+            reduction: false,
+            ..IpBackend::new(settings)
+        }
+    }
+
+    /// Since the backend was made: iterations that factorized a reduced matrix, those of
+    /// them whose reduced matrix was not enough (the full one was factorized too), and
+    /// solves done again without reduction.
+    pub fn reduction_counts(&self) -> (usize, usize, usize) {
+        (
+            self.reduced_iterations,
+            self.reduction_fallbacks,
+            self.reduction_retries,
+        )
     }
 
     /// Solves so far that reused the previous QP's symbolic factorization.
@@ -190,6 +273,29 @@ impl Split {
             e_ptr,
             e_col,
             e_val,
+        }
+    }
+
+    /// The same equality rows and the inequality constraints `keep` only (in that order).
+    fn subset(&self, keep: &[usize]) -> Split {
+        let (mut g_ptr, mut g_col, mut g_val) = (vec![0], Vec::new(), Vec::new());
+        for &j in keep {
+            let (cs, vs) = self.g_row(j);
+            g_col.extend_from_slice(cs);
+            g_val.extend_from_slice(vs);
+            g_ptr.push(g_col.len());
+        }
+        Split {
+            ineq: keep.iter().map(|&j| self.ineq[j]).collect(),
+            h: keep.iter().map(|&j| self.h[j]).collect(),
+            eq: self.eq.clone(),
+            b: self.b.clone(),
+            g_ptr,
+            g_col,
+            g_val,
+            e_ptr: self.e_ptr.clone(),
+            e_col: self.e_col.clone(),
+            e_val: self.e_val.clone(),
         }
     }
 
@@ -492,7 +598,34 @@ impl QpBackend for IpBackend {
         self.settings.eps_rel = tol;
     }
 
+    /// With constraint reduction, a solve that ends other than `Solved` (or at the time
+    /// limit) after factorizing a reduced matrix is done again without reduction.
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
+        let before = self.reduced_iterations;
+        let sol = self.solve_with(qp, warm, self.reduction)?;
+        if self.reduced_iterations > before
+            && !matches!(sol.status, QpStatus::Solved | QpStatus::TimeLimit)
+        {
+            self.reduction_retries += 1;
+            let again = self.solve_with(qp, warm, false)?;
+            return Ok(QpSolution {
+                iterations: sol.iterations + again.iterations,
+                solve_time_s: sol.solve_time_s + again.solve_time_s,
+                ..again
+            });
+        }
+        Ok(sol)
+    }
+}
+
+impl IpBackend {
+    /// One solve, with constraint reduction or without.
+    fn solve_with(
+        &mut self,
+        qp: &Qp,
+        warm: Option<&WarmStart>,
+        reduction: bool,
+    ) -> Result<QpSolution, QpError> {
         let start = Instant::now();
         self.settings.validate()?;
         qp.validate()?;
@@ -508,10 +641,9 @@ impl QpBackend for IpBackend {
             iterations: 0,
             solve_time_s: 0.0,
         };
-        let Some(mut kkt) = Kkt::new(qp, &split, &mut self.symbolic) else {
-            out.solve_time_s = start.elapsed().as_secs_f64();
-            return Ok(out);
-        };
+        // The full condensed matrix, built when first needed (module documentation,
+        // "Constraint reduction").
+        let mut kkt: Option<Kkt> = None;
         // the duals of the original rows: y_i = z_upper − z_lower, −y_E on equality rows
         let map_y = |z: &[f64], ye: &[f64]| {
             let mut y = vec![0.0; m];
@@ -542,18 +674,16 @@ impl QpBackend for IpBackend {
                 .collect()
         });
         let weights: Vec<f64> = match &warm_z {
-            Some(wz) => wz
-                .iter()
-                .map(|&v| if v > 0.0 { 1.0 } else { 0.0 })
-                .collect(),
+            Some(wz) => {
+                // the rows that hold a dual: above a millionth of the largest (an
+                // interior-point solution leaves every dual positive)
+                let floor = WARM_DUAL_REL * wz.iter().copied().fold(0.0, f64::max);
+                wz.iter()
+                    .map(|&v| if v > floor && v > 0.0 { 1.0 } else { 0.0 })
+                    .collect()
+            }
             None => vec![1.0; mi],
         };
-        let vals_true = kkt.values(qp, &weights, 0.0, 0.0);
-        let vals = kkt.values(qp, &weights, reg, reg);
-        if !kkt.factor(&vals, reg) {
-            out.solve_time_s = start.elapsed().as_secs_f64();
-            return Ok(out);
-        }
         let mut rhs = vec![0.0; dim];
         for (r, qv) in rhs.iter_mut().zip(&qp.q) {
             *r = -qv;
@@ -574,7 +704,66 @@ impl QpBackend for IpBackend {
         for (k, bv) in split.b.iter().enumerate() {
             rhs[n + k] = *bv;
         }
-        let sol = kkt.solve_refined(&vals_true, &rhs);
+        // Constraint reduction: per inequality, |g_j|² and the smallest diagonal entry of P
+        // over its columns; the rows in the reduced matrix (those of a warm start's duals at
+        // first).
+        let mut pdiag = vec![0.0; n];
+        for (j, pd) in pdiag.iter_mut().enumerate() {
+            for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
+                if qp.p.rowval[p] == j {
+                    *pd = qp.p.nzval[p];
+                }
+            }
+        }
+        let (mut gnorm2, mut pmin) = (vec![0.0; mi], vec![0.0; mi]);
+        for j in 0..mi {
+            let (cs, vs) = split.g_row(j);
+            gnorm2[j] = vs.iter().map(|v| v * v).sum();
+            pmin[j] = cs
+                .iter()
+                .map(|&c| pdiag[c])
+                .fold(f64::INFINITY, f64::min)
+                .max(reg);
+        }
+        let mut in_q: Vec<bool> = weights.iter().map(|&w| w > 0.0).collect();
+        let n_q = in_q.iter().filter(|&&b| b).count();
+        let mut reduce = reduction && mi > 0;
+        // no reduced matrix before this iteration (after one that was not enough)
+        let mut pause_until = 0usize;
+        let mut reduced: Option<(Vec<usize>, Kkt)> = None;
+        let sol = if reduce && warm_z.is_some() && n_q as f64 <= REDUCE_MAX_FRACTION * mi as f64 {
+            // the rows with weight 0 are not in this system: the reduced matrix is exact
+            let keep: Vec<usize> = (0..mi).filter(|&j| in_q[j]).collect();
+            let Some(mut rk) = Kkt::new(qp, &split.subset(&keep), &mut self.symbolic_reduced)
+            else {
+                out.solve_time_s = start.elapsed().as_secs_f64();
+                return Ok(out);
+            };
+            let ones = vec![1.0; keep.len()];
+            let vals_true = rk.values(qp, &ones, 0.0, 0.0);
+            let vals = rk.values(qp, &ones, reg, reg);
+            if !rk.factor(&vals, reg) {
+                out.solve_time_s = start.elapsed().as_secs_f64();
+                return Ok(out);
+            }
+            let sol = rk.solve_refined(&vals_true, &rhs);
+            reduced = Some((keep, rk));
+            sol
+        } else {
+            let Some(mut k) = Kkt::new(qp, &split, &mut self.symbolic) else {
+                out.solve_time_s = start.elapsed().as_secs_f64();
+                return Ok(out);
+            };
+            let vals_true = k.values(qp, &weights, 0.0, 0.0);
+            let vals = k.values(qp, &weights, reg, reg);
+            if !k.factor(&vals, reg) {
+                out.solve_time_s = start.elapsed().as_secs_f64();
+                return Ok(out);
+            }
+            let sol = k.solve_refined(&vals_true, &rhs);
+            kkt = Some(k);
+            sol
+        };
         let mut x = sol[..n].to_vec();
         let mut ye: Vec<f64> = sol[n..].iter().map(|v| -v).collect();
         let mut gx = vec![0.0; mi];
@@ -641,19 +830,71 @@ impl QpBackend for IpBackend {
             let mu = if mi > 0 { gap / mi as f64 } else { 0.0 };
             // the matrix of this iteration
             let d: Vec<f64> = sl.iter().zip(&z).map(|(a, b)| b / a).collect();
-            let vals = kkt.values(qp, &d, reg, reg);
-            if !kkt.factor(&vals, reg) {
-                out.status = QpStatus::NumericalError;
-                break;
+            // Constraint reduction (module documentation): this iteration's rows are those
+            // whose weight is not negligible; a new reduced matrix when they change.
+            let mut full = !reduce || it < pause_until;
+            if !full {
+                let mut changed = false;
+                let mut n_q = 0;
+                for j in 0..mi {
+                    let want = d[j] * gnorm2[j] >= REDUCE_BELOW * pmin[j];
+                    changed |= want != in_q[j];
+                    in_q[j] = want;
+                    n_q += want as usize;
+                }
+                if n_q as f64 > REDUCE_MAX_FRACTION * mi as f64 {
+                    full = true;
+                    reduced = None;
+                } else if changed || reduced.is_none() {
+                    let keep: Vec<usize> = (0..mi).filter(|&j| in_q[j]).collect();
+                    match Kkt::new(qp, &split.subset(&keep), &mut self.symbolic_reduced) {
+                        Some(k) => reduced = Some((keep, k)),
+                        None => {
+                            reduce = false;
+                            full = true;
+                            reduced = None;
+                        }
+                    }
+                }
             }
-            // Δ for a complementarity right-hand side rc: the condensed system, then up to
-            // `refine` steps of iterative refinement on the full Newton system (equations (a),
-            // (c); (b) and (d) hold by construction), which also absorbs the regularization;
-            // a step is skipped once the residual is below `refine_below`.
+            if !full {
+                self.reduced_iterations += 1;
+                let (keep, rk) = reduced.as_mut().expect("built above");
+                let dq: Vec<f64> = keep.iter().map(|&j| d[j]).collect();
+                let vals = rk.values(qp, &dq, reg, reg);
+                if !rk.factor(&vals, reg) {
+                    reduce = false;
+                    full = true;
+                    reduced = None;
+                }
+            }
+            if full {
+                if kkt.is_none() {
+                    kkt = Kkt::new(qp, &split, &mut self.symbolic);
+                }
+                let Some(k) = kkt.as_mut() else {
+                    out.status = QpStatus::NumericalError;
+                    break;
+                };
+                let vals = k.values(qp, &d, reg, reg);
+                if !k.factor(&vals, reg) {
+                    out.status = QpStatus::NumericalError;
+                    break;
+                }
+            }
+            // Δ for a complementarity right-hand side rc, with the factorization `f`: the
+            // condensed system, then up to `refine` steps of iterative refinement on the full
+            // Newton system (equations (a), (c); (b) and (d) hold by construction), which also
+            // absorbs the regularization and, with the reduced matrix, the rows left out of
+            // it; a step is skipped once the residual is below `refine_below` (or, with the
+            // reduced matrix, below 1e-10 of the right-hand side). Also returns whether the
+            // residual got there.
             let refine_below = REFINE_BELOW * s.eps_abs;
-            let mut direction = |rc: &[f64],
-                                 refine: usize|
-             -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+            let direction = |f: &mut Kkt,
+                             rc: &[f64],
+                             refine: usize,
+                             relative: bool|
+             -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, bool) {
                 // w = S⁻¹(rc − Z rp)
                 let w: Vec<f64> = (0..mi).map(|j| (rc[j] - z[j] * rp[j]) / sl[j]).collect();
                 let mut rhs = vec![0.0; dim];
@@ -664,14 +905,24 @@ impl QpBackend for IpBackend {
                 for (k, v) in re.iter().enumerate() {
                     rhs[n + k] = -v;
                 }
-                kkt.solve(&mut rhs);
+                let below = if relative {
+                    refine_below.max(REDUCED_REFINE_REL * inf_norm(&rhs))
+                } else {
+                    refine_below
+                };
+                let mut last = f64::INFINITY;
+                f.solve(&mut rhs);
                 let mut dx = rhs[..n].to_vec();
                 let mut dye: Vec<f64> = rhs[n..].iter().map(|v| -v).collect();
                 let mut gdx = vec![0.0; mi];
                 split.g_mul(&dx, &mut gdx);
                 let mut ds: Vec<f64> = (0..mi).map(|j| gdx[j] + rp[j]).collect();
                 let mut dz: Vec<f64> = (0..mi).map(|j| (rc[j] - z[j] * ds[j]) / sl[j]).collect();
-                for _ in 0..refine {
+                let mut converged = false;
+                for k in 0..=refine {
+                    if refine == 0 {
+                        break;
+                    }
                     // ρ_a = −r_d − (P Δx − Gᵀ Δz − Eᵀ Δy), ρ_c = −r_e − E Δx
                     let mut ra: Vec<f64> = rd.iter().map(|v| -v).collect();
                     let mut pdx = vec![0.0; n];
@@ -685,10 +936,17 @@ impl QpBackend for IpBackend {
                     split.e_mul(&dx, &mut edx);
                     let mut corr = ra;
                     corr.extend(re.iter().zip(&edx).map(|(a, b)| -a - b));
-                    if inf_norm(&corr) <= refine_below {
+                    let res = inf_norm(&corr);
+                    if res <= below {
+                        converged = true;
                         break;
                     }
-                    kkt.solve(&mut corr);
+                    // the last step, or (with the reduced matrix) refinement that stalls
+                    if k == refine || (relative && res > REDUCED_STALL * last) {
+                        break;
+                    }
+                    last = res;
+                    f.solve(&mut corr);
                     split.g_mul(&corr[..n], &mut gdx);
                     for (v, c) in dx.iter_mut().zip(&corr[..n]) {
                         *v += c;
@@ -701,30 +959,78 @@ impl QpBackend for IpBackend {
                         dz[j] -= z[j] * gdx[j] / sl[j];
                     }
                 }
-                (dx, dye, ds, dz)
+                (dx, dye, ds, dz, converged)
             };
-            // predictor
             let rc_aff: Vec<f64> = (0..mi).map(|j| -sl[j] * z[j]).collect();
-            let (_, _, ds_a, dz_a) = direction(&rc_aff, 0);
-            let a_aff = max_step(&sl, &ds_a).min(max_step(&z, &dz_a));
-            let mu_aff = if mi > 0 {
-                (0..mi)
-                    .map(|j| (sl[j] + a_aff * ds_a[j]) * (z[j] + a_aff * dz_a[j]))
-                    .sum::<f64>()
-                    / mi as f64
-            } else {
-                0.0
+            let predictor_corrector = |f: &mut Kkt, is_reduced: bool| {
+                // predictor
+                let (_, _, ds_a, dz_a, _) = direction(
+                    f,
+                    &rc_aff,
+                    if is_reduced {
+                        REDUCED_REFINE_PREDICTOR
+                    } else {
+                        0
+                    },
+                    is_reduced,
+                );
+                let a_aff = max_step(&sl, &ds_a).min(max_step(&z, &dz_a));
+                let mu_aff = if mi > 0 {
+                    (0..mi)
+                        .map(|j| (sl[j] + a_aff * ds_a[j]) * (z[j] + a_aff * dz_a[j]))
+                        .sum::<f64>()
+                        / mi as f64
+                } else {
+                    0.0
+                };
+                let sigma = if mu > 0.0 {
+                    (mu_aff / mu).powi(3).min(1.0)
+                } else {
+                    0.0
+                };
+                // corrector
+                let rc: Vec<f64> = (0..mi)
+                    .map(|j| -sl[j] * z[j] - ds_a[j] * dz_a[j] + sigma * mu)
+                    .collect();
+                direction(
+                    f,
+                    &rc,
+                    if is_reduced { REDUCED_REFINE } else { 2 },
+                    is_reduced,
+                )
             };
-            let sigma = if mu > 0.0 {
-                (mu_aff / mu).powi(3).min(1.0)
+            let (dx, dye, ds, dz) = if full {
+                let k = kkt.as_mut().expect("factorized above");
+                let (dx, dye, ds, dz, _) = predictor_corrector(k, false);
+                (dx, dye, ds, dz)
             } else {
-                0.0
+                let (_, rk) = reduced.as_mut().expect("factorized above");
+                let (dx, dye, ds, dz, ok) = predictor_corrector(rk, true);
+                // The reduced matrix did not give the Newton direction (its rows are not yet
+                // separated): the full matrix, for this iteration and the next `REDUCE_PAUSE`.
+                let found = ok.then_some((dx, dye, ds, dz));
+                match found {
+                    Some(f) => f,
+                    None => {
+                        self.reduction_fallbacks += 1;
+                        pause_until = it + 1 + REDUCE_PAUSE;
+                        if kkt.is_none() {
+                            kkt = Kkt::new(qp, &split, &mut self.symbolic);
+                        }
+                        let Some(k) = kkt.as_mut() else {
+                            out.status = QpStatus::NumericalError;
+                            break;
+                        };
+                        let vals = k.values(qp, &d, reg, reg);
+                        if !k.factor(&vals, reg) {
+                            out.status = QpStatus::NumericalError;
+                            break;
+                        }
+                        let (dx, dye, ds, dz, _) = predictor_corrector(k, false);
+                        (dx, dye, ds, dz)
+                    }
+                }
             };
-            // corrector
-            let rc: Vec<f64> = (0..mi)
-                .map(|j| -sl[j] * z[j] - ds_a[j] * dz_a[j] + sigma * mu)
-                .collect();
-            let (dx, dye, ds, dz) = direction(&rc, 2);
             let alpha = (0.99 * max_step(&sl, &ds).min(max_step(&z, &dz))).min(1.0);
             if alpha.is_nan() || alpha <= 1e-12 || dx.iter().any(|v| !v.is_finite()) {
                 out.status = QpStatus::NumericalError;
@@ -912,6 +1218,75 @@ mod tests {
             warm.iterations,
             cold.iterations
         );
+    }
+
+    /// Constraint reduction: with many rows far from binding that couple distant variables
+    /// (as the lazy oracle's rows for a long step do), a warm-started solve factorizes
+    /// reduced matrices and reaches the solution of the backend that factorizes the full
+    /// matrix at every iteration; without reduction no reduced matrix is factorized.
+    #[test]
+    fn constraint_reduction_reaches_the_full_solution() {
+        let settings = tight();
+        let base = chain_qp(80);
+        let (n, m0) = (base.n(), base.m());
+        // rows x_i − x_{i+17} ≥ −50 and y_i + y_{i+29} ≥ −60: never binding
+        let mut at = Vec::new();
+        for j in 0..n {
+            for p in base.a.colptr[j]..base.a.colptr[j + 1] {
+                at.push((base.a.rowval[p], j, base.a.nzval[p]));
+            }
+        }
+        let (mut l, mut u) = (base.l.clone(), base.u.clone());
+        let mut row = m0;
+        for i in 0..80 {
+            if i + 17 < 80 {
+                at.push((row, 2 * i, 1.0));
+                at.push((row, 2 * (i + 17), -1.0));
+                l.push(-50.0);
+                u.push(f64::INFINITY);
+                row += 1;
+            }
+            if i + 29 < 80 {
+                at.push((row, 2 * i + 1, 1.0));
+                at.push((row, 2 * (i + 29) + 1, 1.0));
+                l.push(-60.0);
+                u.push(f64::INFINITY);
+                row += 1;
+            }
+        }
+        let qp = Qp {
+            p: base.p.clone(),
+            q: base.q.clone(),
+            a: CscMatrix::from_triplets(row, n, &at).unwrap(),
+            l,
+            u,
+        };
+        let mut full = IpBackend::without_reduction(settings.clone());
+        let cold = full.solve(&qp, None).unwrap();
+        assert_eq!(cold.status, QpStatus::Solved);
+        // a warm start from a nearby QP's solution (the linear term moved)
+        let mut moved = qp.clone();
+        moved.q.iter_mut().for_each(|v| *v *= 1.05);
+        let warm = WarmStart {
+            x: Vec::new(),
+            y: cold.y.clone(),
+        };
+        let reference = full.solve(&moved, Some(&warm)).unwrap();
+        let mut reduced = IpBackend::new(settings);
+        let sol = reduced.solve(&moved, Some(&warm)).unwrap();
+        assert_eq!(reference.status, QpStatus::Solved);
+        assert_eq!(sol.status, QpStatus::Solved);
+        let (jr, js) = (moved.objective(&reference.x), moved.objective(&sol.x));
+        assert!(
+            (jr - js).abs() <= 1e-8 * jr.abs().max(1.0),
+            "{js} against {jr}"
+        );
+        assert!(moved.primal_residual(&sol.x) < 1e-9);
+        let (iters, fallbacks, retries) = reduced.reduction_counts();
+        assert!(iters > 0, "no reduced matrix was factorized");
+        assert!(fallbacks <= iters);
+        assert_eq!(retries, 0);
+        assert_eq!(full.reduction_counts(), (0, 0, 0));
     }
 
     /// The symbolic factorization is reused when the next QP has the same pattern (other
