@@ -42,23 +42,24 @@
 //! # Constraint reduction
 //!
 //! Most rows of a contact QP end far from binding (balloons n = 1600: about 7 600 of 54 000
-//! rows hold a dual at the solution), yet every row couples its vertices in `K`: rows the lazy
-//! oracle added for a long step couple vertices many edges apart, and the factor `L` of the
-//! full `K` had 24 times the entries of the factor of `P` plus the binding rows alone. So each
-//! iteration factorizes a reduced matrix instead, built from the rows whose weight is not
-//! negligible, `D_jj |g_j|² ≥ REDUCE_BELOW · min_c P_cc` over the row's columns `c` (a row
-//! with a smaller weight moves its vertices' stiffness by less than that fraction), in the
-//! manner of the constraint-reduced interior-point methods of Tits et al. (J. Optim. Theory
-//! Appl., 2006; for QPs, Jung, O'Leary and Tits, Comput. Optim. Appl., 2008). The direction
-//! is still the Newton direction of the whole QP: the refinement above runs against the full
-//! Newton system (every row), with the reduced factorization as its solver, for up to
-//! `REDUCED_REFINE` steps until the residual is below `REDUCED_REFINE_REL` of the right-hand
-//! side (or `REFINE_BELOW·eps_abs`). If it does not get there (the rows are not yet
-//! separated: it stalls or grows), the iteration factorizes the full `K` as before, and so do
-//! the next `REDUCE_PAUSE`. Reduction is skipped while more than `REDUCE_MAX_FRACTION` of the
-//! rows would be in it. The reduced matrices' symbolic factorizations are cached like the
-//! full one's; the full `K` is only assembled when an iteration needs it. The warm start's
-//! first system holds exactly the rows with a dual, so it is reduced already.
+//! rows hold a dual at the solution), yet every row couples its vertices in `K`: rows the
+//! lazy oracle added for a long step couple vertices many edges apart, and the factor `L` of
+//! the full `K` had 23–25 times the entries of the factor of `P` plus the binding rows alone.
+//! So each iteration factorizes a reduced matrix instead, built from the rows whose weight is
+//! not negligible, `D_jj |g_j|² ≥ REDUCE_BELOW · min_c P_cc` over the row's columns `c` (a
+//! row with a smaller weight moves its vertices' stiffness by less than that fraction). This
+//! is the idea of the constraint-reduced interior-point methods (Tits, Absil and Woessner
+//! for linear programs; Jung, O'Leary and Tits for convex QPs), with one difference: the
+//! direction here is still the Newton direction of the whole QP. The refinement above runs
+//! against the full Newton system (every row), with the reduced factorization as its
+//! solver, for up to `REDUCED_REFINE` steps until the residual is below `REDUCED_REFINE_REL`
+//! of the right-hand side (or `REFINE_BELOW·eps_abs`). If it does not get there (the rows
+//! are not yet separated: it stalls or grows), the iteration factorizes the full `K` as
+//! before, and so do the next `REDUCE_PAUSE`; a solve that then does not end `Solved` is
+//! done again without reduction. Reduction is skipped while more than `REDUCE_MAX_FRACTION`
+//! of the rows would be in it. The reduced matrices' symbolic factorizations are cached like
+//! the full one's; the full `K` is only assembled when an iteration needs it. The warm
+//! start's first system holds exactly the rows with a dual, so it is reduced already.
 //! [`IpBackend::without_reduction`] factorizes the full `K` at every iteration.
 //!
 //! Unlike the KKT form of a general interior-point code (`n + m` unknowns), this system has
