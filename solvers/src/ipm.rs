@@ -572,6 +572,24 @@ impl Kkt {
     }
 }
 
+/// The full condensed matrix (built on first use, with `cache`) factorized for the weights
+/// `d`; `None` when it cannot be built or factorized.
+fn factor_full<'a>(
+    kkt: &'a mut Option<Kkt>,
+    qp: &Qp,
+    split: &Split,
+    cache: &mut Option<SymbolicCache>,
+    d: &[f64],
+    reg: f64,
+) -> Option<&'a mut Kkt> {
+    if kkt.is_none() {
+        *kkt = Kkt::new(qp, split, cache);
+    }
+    let k = kkt.as_mut()?;
+    let vals = k.values(qp, d, reg, reg);
+    k.factor(&vals, reg).then_some(k)
+}
+
 /// The longest `α ∈ (0, 1]` keeping `v + α·dv > 0` (and `1` when nothing limits it).
 fn max_step(v: &[f64], dv: &[f64]) -> f64 {
     v.iter()
@@ -869,19 +887,9 @@ impl IpBackend {
                     reduced = None;
                 }
             }
-            if full {
-                if kkt.is_none() {
-                    kkt = Kkt::new(qp, &split, &mut self.symbolic);
-                }
-                let Some(k) = kkt.as_mut() else {
-                    out.status = QpStatus::NumericalError;
-                    break;
-                };
-                let vals = k.values(qp, &d, reg, reg);
-                if !k.factor(&vals, reg) {
-                    out.status = QpStatus::NumericalError;
-                    break;
-                }
+            if full && factor_full(&mut kkt, qp, &split, &mut self.symbolic, &d, reg).is_none() {
+                out.status = QpStatus::NumericalError;
+                break;
             }
             // Δ for a complementarity right-hand side rc, with the factorization `f`: the
             // condensed system, then up to `refine` steps of iterative refinement on the full
@@ -1015,18 +1023,12 @@ impl IpBackend {
                     None => {
                         self.reduction_fallbacks += 1;
                         pause_until = it + 1 + REDUCE_PAUSE;
-                        if kkt.is_none() {
-                            kkt = Kkt::new(qp, &split, &mut self.symbolic);
-                        }
-                        let Some(k) = kkt.as_mut() else {
+                        let Some(k) =
+                            factor_full(&mut kkt, qp, &split, &mut self.symbolic, &d, reg)
+                        else {
                             out.status = QpStatus::NumericalError;
                             break;
                         };
-                        let vals = k.values(qp, &d, reg, reg);
-                        if !k.factor(&vals, reg) {
-                            out.status = QpStatus::NumericalError;
-                            break;
-                        }
                         let (dx, dye, ds, dz, _) = predictor_corrector(k, false);
                         (dx, dye, ds, dz)
                     }
