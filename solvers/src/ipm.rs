@@ -750,39 +750,31 @@ impl IpBackend {
         // no reduced matrix before this iteration (after one that was not enough)
         let mut pause_until = 0usize;
         let mut reduced: Option<(Vec<usize>, Kkt)> = None;
-        let sol = if reduce && warm_z.is_some() && n_q as f64 <= REDUCE_MAX_FRACTION * mi as f64 {
-            // the rows with weight 0 are not in this system: the reduced matrix is exact
-            let keep: Vec<usize> = (0..mi).filter(|&j| in_q[j]).collect();
-            let Some(mut rk) = Kkt::new(qp, &split.subset(&keep), &mut self.symbolic_reduced)
-            else {
-                out.solve_time_s = start.elapsed().as_secs_f64();
-                return Ok(out);
-            };
-            let ones = vec![1.0; keep.len()];
-            let vals_true = rk.values(qp, &ones, 0.0, 0.0);
-            let vals = rk.values(qp, &ones, reg, reg);
-            if !rk.factor(&vals, reg) {
-                out.solve_time_s = start.elapsed().as_secs_f64();
-                return Ok(out);
-            }
-            let sol = rk.solve_refined(&vals_true, &rhs);
-            reduced = Some((keep, rk));
-            sol
-        } else {
-            let Some(mut k) = Kkt::new(qp, &split, &mut self.symbolic) else {
-                out.solve_time_s = start.elapsed().as_secs_f64();
-                return Ok(out);
-            };
-            let vals_true = k.values(qp, &weights, 0.0, 0.0);
-            let vals = k.values(qp, &weights, reg, reg);
-            if !k.factor(&vals, reg) {
-                out.solve_time_s = start.elapsed().as_secs_f64();
-                return Ok(out);
-            }
-            let sol = k.solve_refined(&vals_true, &rhs);
-            kkt = Some(k);
-            sol
+        // The starting point's system: reduced when a warm start holds few enough duals
+        // (its rows of weight 0 are not in it, so the reduced matrix is exact).
+        let start_rows: Option<Vec<usize>> =
+            (reduce && warm_z.is_some() && n_q as f64 <= REDUCE_MAX_FRACTION * mi as f64)
+                .then(|| (0..mi).filter(|&j| in_q[j]).collect());
+        let sub = start_rows.as_ref().map(|keep| split.subset(keep));
+        let (start_split, start_weights, cache) = match (&sub, &start_rows) {
+            (Some(sub), Some(keep)) => (sub, vec![1.0; keep.len()], &mut self.symbolic_reduced),
+            _ => (&split, weights.clone(), &mut self.symbolic),
         };
+        let Some(mut k) = Kkt::new(qp, start_split, cache) else {
+            out.solve_time_s = start.elapsed().as_secs_f64();
+            return Ok(out);
+        };
+        let vals_true = k.values(qp, &start_weights, 0.0, 0.0);
+        let vals = k.values(qp, &start_weights, reg, reg);
+        if !k.factor(&vals, reg) {
+            out.solve_time_s = start.elapsed().as_secs_f64();
+            return Ok(out);
+        }
+        let sol = k.solve_refined(&vals_true, &rhs);
+        match start_rows {
+            Some(keep) => reduced = Some((keep, k)),
+            None => kkt = Some(k),
+        }
         let mut x = sol[..n].to_vec();
         let mut ye: Vec<f64> = sol[n..].iter().map(|v| -v).collect();
         let mut gx = vec![0.0; mi];
