@@ -724,29 +724,32 @@ impl IpBackend {
             rhs[n + k] = *bv;
         }
         // Constraint reduction: per inequality, |g_j|² and the smallest diagonal entry of P
-        // over its columns; the rows in the reduced matrix (those of a warm start's duals at
-        // first).
-        let mut pdiag = vec![0.0; n];
-        for (j, pd) in pdiag.iter_mut().enumerate() {
-            for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
-                if qp.p.rowval[p] == j {
-                    *pd = qp.p.nzval[p];
+        // over its columns (not needed without reduction); the rows in the reduced matrix
+        // (those of a warm start's duals at first).
+        let mut reduce = reduction && mi > 0;
+        let (mut gnorm2, mut pmin) = (Vec::new(), Vec::new());
+        if reduce {
+            let mut pdiag = vec![0.0; n];
+            for (j, pd) in pdiag.iter_mut().enumerate() {
+                for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
+                    if qp.p.rowval[p] == j {
+                        *pd = qp.p.nzval[p];
+                    }
                 }
             }
-        }
-        let (mut gnorm2, mut pmin) = (vec![0.0; mi], vec![0.0; mi]);
-        for j in 0..mi {
-            let (cs, vs) = split.g_row(j);
-            gnorm2[j] = vs.iter().map(|v| v * v).sum();
-            pmin[j] = cs
-                .iter()
-                .map(|&c| pdiag[c])
-                .fold(f64::INFINITY, f64::min)
-                .max(reg);
+            for j in 0..mi {
+                let (cs, vs) = split.g_row(j);
+                gnorm2.push(vs.iter().map(|v| v * v).sum::<f64>());
+                pmin.push(
+                    cs.iter()
+                        .map(|&c| pdiag[c])
+                        .fold(f64::INFINITY, f64::min)
+                        .max(reg),
+                );
+            }
         }
         let mut in_q: Vec<bool> = weights.iter().map(|&w| w > 0.0).collect();
         let n_q = in_q.iter().filter(|&&b| b).count();
-        let mut reduce = reduction && mi > 0;
         // no reduced matrix before this iteration (after one that was not enough)
         let mut pause_until = 0usize;
         let mut reduced: Option<(Vec<usize>, Kkt)> = None;
@@ -888,8 +891,8 @@ impl IpBackend {
             // Newton system (equations (a), (c); (b) and (d) hold by construction), which also
             // absorbs the regularization and, with the reduced matrix, the rows left out of
             // it; a step is skipped once the residual is below `refine_below` (or, with the
-            // reduced matrix, below 1e-10 of the right-hand side). Also returns whether the
-            // residual got there.
+            // reduced matrix, below `REDUCED_REFINE_REL` of the right-hand side). Also returns
+            // whether the residual got there.
             let refine_below = REFINE_BELOW * s.eps_abs;
             let direction = |f: &mut Kkt,
                              rc: &[f64],
@@ -1007,23 +1010,21 @@ impl IpBackend {
             } else {
                 let (_, rk) = reduced.as_mut().expect("factorized above");
                 let (dx, dye, ds, dz, ok) = predictor_corrector(rk, true);
-                // The reduced matrix did not give the Newton direction (its rows are not yet
-                // separated): the full matrix, for this iteration and the next `REDUCE_PAUSE`.
-                let found = ok.then_some((dx, dye, ds, dz));
-                match found {
-                    Some(f) => f,
-                    None => {
-                        self.reduction_fallbacks += 1;
-                        pause_until = it + 1 + REDUCE_PAUSE;
-                        let Some(k) =
-                            factor_full(&mut kkt, qp, &split, &mut self.symbolic, &d, reg)
-                        else {
-                            out.status = QpStatus::NumericalError;
-                            break;
-                        };
-                        let (dx, dye, ds, dz, _) = predictor_corrector(k, false);
-                        (dx, dye, ds, dz)
-                    }
+                if ok {
+                    (dx, dye, ds, dz)
+                } else {
+                    // The reduced matrix did not give the Newton direction (its rows are not
+                    // yet separated): the full matrix, for this iteration and the next
+                    // `REDUCE_PAUSE`.
+                    self.reduction_fallbacks += 1;
+                    pause_until = it + 1 + REDUCE_PAUSE;
+                    let Some(k) = factor_full(&mut kkt, qp, &split, &mut self.symbolic, &d, reg)
+                    else {
+                        out.status = QpStatus::NumericalError;
+                        break;
+                    };
+                    let (dx, dye, ds, dz, _) = predictor_corrector(k, false);
+                    (dx, dye, ds, dz)
                 }
             };
             let alpha = (0.99 * max_step(&sl, &ds).min(max_step(&z, &dz))).min(1.0);
