@@ -263,26 +263,30 @@ impl QpBackend for FailsWhenTightened {
     }
 }
 
+/// The solids, the SQP method, and Clarabel failing once tightened (`error`: with an error).
+fn sqp_solids_failing_when_tightened(
+    error: bool,
+) -> (contactlab::scene::Scene, FailsWhenTightened, OuterSettings) {
+    use contactlab::scene::solids::{build, SolidsParams};
+    use contactlab::solve::sqp::OuterMethod;
+    let scene = build(&SolidsParams::default()).unwrap();
+    let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+    let tol0 = inner.tolerance().unwrap();
+    let settings = OuterSettings {
+        method: OuterMethod::Sqp,
+        ..Default::default()
+    };
+    (scene, FailsWhenTightened { inner, tol0, error }, settings)
+}
+
 /// The solids with the SQP method tighten the tolerance once (tests/sqp.rs); when the backend
 /// then fails, the run does not end `subproblem_failed`: it stops at the state where the
 /// stopping rule held, with the run's tolerance back, admissible, its status the
 /// certificate's (here `fixed_point`: that state's κ is above tol_κ).
 #[test]
 fn a_backend_failing_at_the_tightened_tolerance_ends_the_sqp_run_at_its_last_state() {
-    use contactlab::scene::solids::{build, SolidsParams};
-    use contactlab::solve::sqp::OuterMethod;
-    let scene = build(&SolidsParams::default()).unwrap();
-    let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
-    let tol0 = inner.tolerance().unwrap();
-    let mut b = FailsWhenTightened {
-        inner,
-        tol0,
-        error: false,
-    };
-    let settings = OuterSettings {
-        method: OuterMethod::Sqp,
-        ..Default::default()
-    };
+    let (scene, mut b, settings) = sqp_solids_failing_when_tightened(false);
+    let tol0 = b.tol0;
     let mut last = f64::INFINITY;
     let res = run(
         &scene.mesh,
@@ -314,20 +318,8 @@ fn a_backend_failing_at_the_tightened_tolerance_ends_the_sqp_run_at_its_last_sta
 /// still gives the caller the backend back at its own tolerance.
 #[test]
 fn the_backend_tolerance_is_restored_when_the_run_ends_with_an_error() {
-    use contactlab::scene::solids::{build, SolidsParams};
-    use contactlab::solve::sqp::OuterMethod;
-    let scene = build(&SolidsParams::default()).unwrap();
-    let inner = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
-    let tol0 = inner.tolerance().unwrap();
-    let mut b = FailsWhenTightened {
-        inner,
-        tol0,
-        error: true,
-    };
-    let settings = OuterSettings {
-        method: OuterMethod::Sqp,
-        ..Default::default()
-    };
+    let (scene, mut b, settings) = sqp_solids_failing_when_tightened(true);
+    let tol0 = b.tol0;
     let err = run(
         &scene.mesh,
         &scene.energy,
