@@ -28,6 +28,30 @@
 use crate::backend::{QpBackend, QpError, QpSolution, WarmStart};
 use crate::qp::{CscMatrix, Qp};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A multiply–rotate hash (rustc's Fx) of a row's key, far cheaper than the default SipHash;
+/// the keys are compared in full on a hash match.
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
 
 /// What happened to one original row.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,30 +77,71 @@ impl Presolve {
     /// Presolves `qp` (which must be valid: [`Qp::validate`]).
     pub fn new(qp: &Qp) -> Presolve {
         let (n, m) = (qp.n(), qp.m());
-        // The rows, as (column, value) lists in column order.
-        let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+        // The rows, as (column, value) lists in column order (CSR: row i is
+        // `rows[ptr[i]..ptr[i + 1]]`).
+        let mut ptr = vec![0usize; m + 1];
+        for (&r, &v) in qp.a.rowval.iter().zip(&qp.a.nzval) {
+            if v != 0.0 {
+                ptr[r + 1] += 1;
+            }
+        }
+        for i in 0..m {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut rows = vec![(0usize, 0.0f64); ptr[m]];
+        let mut fill = ptr[..m].to_vec();
         for j in 0..n {
             for p in qp.a.colptr[j]..qp.a.colptr[j + 1] {
                 if qp.a.nzval[p] != 0.0 {
-                    rows[qp.a.rowval[p]].push((j, qp.a.nzval[p]));
+                    let r = qp.a.rowval[p];
+                    rows[fill[r]] = (j, qp.a.nzval[p]);
+                    fill[r] += 1;
                 }
             }
         }
+        let row = |i: usize| &rows[ptr[i]..ptr[i + 1]];
+        // The groups by key (the columns and the bits of the values over the first entry's
+        // absolute value): a hash of the key to the first reduced row of that hash, and per
+        // reduced row the next one of the same hash; a reduced row is in these chains only
+        // when no earlier one has its key.
+        let key_hash = |r: &[(usize, f64)], s: f64| {
+            let mut h = KeyHasher::default();
+            for &(j, v) in r {
+                h.write_u64(j as u64);
+                h.write_u64((v / s).to_bits());
+            }
+            h.finish()
+        };
+        let same_key = |a: &[(usize, f64)], sa: f64, b: &[(usize, f64)], sb: f64| {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| x.0 == y.0 && (x.1 / sa).to_bits() == (y.1 / sb).to_bits())
+        };
         let mut fate = Vec::with_capacity(m);
-        let mut groups: HashMap<Vec<(usize, u64)>, usize> = HashMap::new();
+        let mut heads: HashMap<u64, usize, BuildHasherDefault<KeyHasher>> = HashMap::default();
+        let mut next_same: Vec<usize> = Vec::new();
         let (mut l, mut u) = (Vec::new(), Vec::new());
         let (mut lower_from, mut upper_from) = (Vec::new(), Vec::new());
         // The first row of each reduced row, and the absolute value of its first entry.
         let mut first: Vec<(usize, f64)> = Vec::new();
-        for (i, row) in rows.iter().enumerate() {
-            if row.is_empty() && qp.l[i] <= 0.0 && 0.0 <= qp.u[i] {
+        for i in 0..m {
+            let ri = row(i);
+            if ri.is_empty() && qp.l[i] <= 0.0 && 0.0 <= qp.u[i] {
                 fate.push(Fate::Zero);
                 continue;
             }
-            let s = row.first().map_or(1.0, |e| e.1.abs());
-            let key: Vec<(usize, u64)> = row.iter().map(|&(j, v)| (j, (v / s).to_bits())).collect();
+            let s = ri.first().map_or(1.0, |e| e.1.abs());
+            let hash = key_hash(ri, s);
+            let mut group = heads.get(&hash).copied();
+            while let Some(r) = group {
+                if same_key(row(first[r].0), first[r].1, ri, s) {
+                    break;
+                }
+                group = (next_same[r] != usize::MAX).then_some(next_same[r]);
+            }
             // a_i = c·a_first with c = s / s_first: the bounds of a_first x are l_i/c, u_i/c.
-            let merged = groups.get(&key).copied().and_then(|r| {
+            let merged = group.and_then(|r| {
                 let c = s / first[r].1;
                 let (li, ui) = (qp.l[i] / c, qp.u[i] / c);
                 // rows whose bounds would cross stay apart: the backend reports infeasibility
@@ -96,7 +161,13 @@ impl Presolve {
                 }
                 None => {
                     let r = first.len();
-                    groups.entry(key).or_insert(r);
+                    next_same.push(usize::MAX);
+                    if group.is_none() {
+                        // first of its key: at the head of its hash's chain
+                        if let Some(h) = heads.insert(hash, r) {
+                            next_same[r] = h;
+                        }
+                    }
                     first.push((i, s));
                     l.push(qp.l[i]);
                     u.push(qp.u[i]);
@@ -110,7 +181,7 @@ impl Presolve {
         let mr = first.len();
         let mut trip = Vec::new();
         for (r, &(i, _)) in first.iter().enumerate() {
-            for &(j, v) in &rows[i] {
+            for &(j, v) in row(i) {
                 trip.push((r, j, v));
             }
         }
@@ -347,6 +418,52 @@ mod tests {
             .solve(&qp, None)
             .unwrap();
         assert_eq!(sol.status, QpStatus::PrimalInfeasible);
+    }
+
+    #[test]
+    fn presolve_keeps_crossing_copies_apart_and_merges_later_ones_into_the_first() {
+        // x₀ − x₁ in [0, 1]; 2x₀ − 2x₁ in [4, 6] (crosses: kept apart); x₀ − x₁ in [0.5, 3]
+        // (merges into the first row); x₀ + x₁ in [0, 1] (another key); 3x₀ + 3x₁ ≤ 9
+        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
+        let a = CscMatrix::from_triplets(
+            5,
+            2,
+            &[
+                (0, 0, 1.0),
+                (0, 1, -1.0),
+                (1, 0, 2.0),
+                (1, 1, -2.0),
+                (2, 0, 1.0),
+                (2, 1, -1.0),
+                (3, 0, 1.0),
+                (3, 1, 1.0),
+                (4, 0, 3.0),
+                (4, 1, 3.0),
+            ],
+        )
+        .unwrap();
+        let qp = Qp {
+            p,
+            q: vec![0.0, 0.0],
+            a,
+            l: vec![0.0, 4.0, 0.5, 0.0, -1e20],
+            u: vec![1.0, 6.0, 3.0, 1.0, 9.0],
+        };
+        let pre = Presolve::new(&qp);
+        assert_eq!(pre.qp().m(), 3);
+        assert_eq!(
+            pre.fate,
+            vec![
+                Fate::Row { r: 0, scale: 1.0 },
+                Fate::Row { r: 1, scale: 1.0 },
+                Fate::Row { r: 0, scale: 1.0 },
+                Fate::Row { r: 2, scale: 1.0 },
+                Fate::Row { r: 2, scale: 3.0 },
+            ]
+        );
+        assert_eq!((pre.qp().l[0], pre.qp().u[0]), (0.5, 1.0));
+        assert_eq!((pre.qp().l[1], pre.qp().u[1]), (4.0, 6.0));
+        assert_eq!((pre.qp().l[2], pre.qp().u[2]), (0.0, 1.0));
     }
 
     #[test]
