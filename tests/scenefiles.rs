@@ -611,5 +611,66 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             ("tangent".into(), 0.0),
             "{name}"
         );
+        // with the Pantz method (a flag over the file's sqp) the model's settings would be
+        // ignored: refused, naming them, whether they come from the file or from a flag
+        let refused = |flags: &[&str], needles: &[&str]| {
+            let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+                .arg("run")
+                .arg(dir.join(name))
+                .args(["--quiet", "--out"])
+                .arg(dir.join("refused"))
+                .args(flags)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{name} {flags:?}: {err}");
+            for n in needles {
+                assert!(
+                    err.contains(n),
+                    "{name} {flags:?}: {n:?} missing from {err}"
+                );
+            }
+        };
+        let pantz = [dynamic, &["--outer-method", "pantz"]].concat();
+        refused(
+            &pantz,
+            &[
+                "--sqp-curvature psd and --sqp-normal-stiffness 0.01",
+                "pantz",
+            ],
+        );
+        let flags = [&pantz[..], &["--sqp-curvature", "off"]].concat();
+        refused(&flags, &["--sqp-normal-stiffness 0.01", "pantz"]);
+        let flags = [
+            &pantz[..],
+            &["--sqp-curvature", "off", "--sqp-normal-stiffness", "0"],
+        ]
+        .concat();
+        assert_eq!(
+            summary(name, &flags)["settings"]["method"],
+            "pantz",
+            "{name}"
+        );
     }
+    // the built-in scenes, from the command line
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run",
+            "ring",
+            "--n",
+            "12",
+            "--quiet",
+            "--sqp-curvature",
+            "full",
+            "--out",
+        ])
+        .arg(dir.join("refused_ring"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--sqp-curvature full set with the pantz outer method"),
+        "{err}"
+    );
 }

@@ -383,7 +383,37 @@ impl RunArgs {
 
 /// Checks `settings` ([`RunSettings::validate`]) in the command line's words: the flag and the
 /// value (a bad backend name or QP tolerance in the backends' own words).
+///
+/// Also refuses the SQP model's settings with the Pantz outer method (as sweep files do):
+/// they would be ignored. This is checked once the command line and a scene file's `[solver]`
+/// are merged, since either may give the method.
 pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
+    if settings.outer_method != OuterMethod::Sqp {
+        let set: Vec<String> = [
+            (
+                "--sqp-curvature",
+                settings.sqp_curvature != Curvature::default(),
+                settings.sqp_curvature.as_str().to_string(),
+            ),
+            (
+                "--sqp-normal-stiffness",
+                settings.sqp_normal_stiffness != 0.0,
+                settings.sqp_normal_stiffness.to_string(),
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}")))
+        .collect();
+        if !set.is_empty() {
+            bail!(
+                "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
+                 --sqp-normal-stiffness, or sqp_curvature and sqp_normal_stiffness in a scene \
+                 file's [solver]) apply to --outer-method sqp only",
+                set.join(" and "),
+                settings.outer_method.as_str()
+            );
+        }
+    }
     let Err(e) = settings.validate() else {
         return Ok(());
     };
