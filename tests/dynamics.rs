@@ -567,6 +567,40 @@ fn dynamics_cli_sqp_curvature_and_normal_stiffness_reach_the_steps_and_the_summa
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `summary.json`'s `settings` of a `--dynamic` run are the outer loop's own: the backend's
+/// tolerance from `--qp-tol` (which sets the certificate's distance tolerance), `--tol-j`,
+/// `--max-inner`, `--newton-model` — not the defaults.
+#[test]
+fn dynamics_summary_settings_are_the_loops_own_with_the_qp_tolerance() {
+    let bin = env!("CARGO_BIN_EXE_contactlab");
+    let dir = std::env::temp_dir().join(format!("contactlab_dyn_qptol_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = std::process::Command::new(bin)
+        .args(["run", "collide", "--dynamic", "--n", "16", "--dt", "0.01"])
+        .args(["--steps", "2", "--qp-tol", "1e-7", "--tol-j", "1e-9"])
+        .args([
+            "--max-inner",
+            "7",
+            "--newton-model",
+            "projected",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["qp_tol"].as_f64(), Some(1e-7));
+    let st = &s["settings"];
+    assert_eq!(st["qp_tol"].as_f64(), Some(1e-7), "{st}");
+    assert_eq!(st["tol_j"].as_f64(), Some(1e-9), "{st}");
+    assert_eq!(st["inner"]["max_inner"].as_u64(), Some(7), "{st}");
+    assert_eq!(st["inner"]["hessian_model"], "projected", "{st}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Every step's certificate reaches the dynamic summary: a step is `converged` exactly where
 /// its κ is within `tol_κ` and `fixed_point` where it is not, the metrics count the latter and
 /// take the largest κ, and the SQP counts add up to the outer iterations under

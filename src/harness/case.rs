@@ -140,6 +140,15 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings
 }
 
+/// The outer-loop settings of a dynamic case whose backend has the settings `qp` (a
+/// `--qp-tol` included): [`outer_settings`] with the backend's tolerance, which sets the
+/// certificate's distance tolerance ([`crate::solve::outer::certificate_active_tol`]).
+pub fn dynamic_outer_settings(cs: &CaseSettings, qp: &QpSettings) -> OuterSettings {
+    let mut settings = outer_settings(cs);
+    settings.qp_tol = qp.eps_abs;
+    settings
+}
+
 /// Runs `scene` with `cs`, calling `observer` on every iterate, then diagnoses a run that
 /// stopped on the stopping rule (`converged` or `fixed_point`).
 pub fn execute(
@@ -256,7 +265,7 @@ pub fn execute_dynamic(
     observer: &mut dyn Observer<DynamicLoop>,
 ) -> Result<(DynamicResult, DynamicMetrics)> {
     let mut backend = backend_from_name(&cs.backend, qp)?;
-    let settings = outer_settings(cs);
+    let settings = dynamic_outer_settings(cs, qp);
     let mass = lumped_mass(&ds.scene.mesh, &ds.scene.mesh.x_ref, &ds.density)?;
     let mut system = System {
         mesh: &ds.scene.mesh,

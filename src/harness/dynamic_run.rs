@@ -284,14 +284,7 @@ fn run_prepared(
         weight,
         metrics: metrics.clone(),
         params: params_json,
-        settings: OuterSettings {
-            tol_j: cs.tol_j.unwrap_or(cs.accuracy.tol_j()),
-            max_outer: cs.max_outer,
-            pruning: cs.pruning,
-            method: cs.outer_method,
-            sqp: case::outer_settings(&cs).sqp,
-            ..Default::default()
-        },
+        settings: case::dynamic_outer_settings(&cs, &qps),
     };
     write_atomic(
         &out.join("summary.json"),
