@@ -51,6 +51,18 @@
 //! (backend name `clarabel`, the default) sets up a new solver for every QP;
 //! [`ClarabelBackend::with_reuse`] (backend name `clarabel-reuse`) keeps it.
 //!
+//! # Retry without equilibration
+//!
+//! Where Clarabel stops with `InsufficientProgress` or `NumericalError`, the QP is solved once
+//! more by a new solver with Clarabel's equilibration (its row and column scaling) off, and
+//! that solve's answer is returned (iterations: both solves'). Found on a Newmark step of
+//! `drop` (`contactlab run drop --dynamic --scheme newmark`, step 264): a 144-variable QP whose
+//! contact row has an entry of 4e-16 (round-off in a normal's component); with equilibration
+//! Clarabel stalled at a duality gap of 2.8e-2 after 10 iterations, without it it solved in 7
+//! (`solvers/tests/data/newmark_drop_insufficient_progress.qps`, test
+//! `clarabel_retries_without_equilibration_where_it_stalls`). A QP Clarabel solves is not
+//! touched, so no other result moves. [`ClarabelBackend::retries`] counts them.
+//!
 //! # Status mapping
 //!
 //! `Solved → Solved`; `AlmostSolved → Solved` only when the returned point meets
@@ -80,6 +92,8 @@ pub struct ClarabelBackend {
     setups: usize,
     /// Whether the solver is kept for the next solve (`with_reuse`); off by default.
     reuse: bool,
+    /// Solves retried without equilibration (module documentation).
+    retries: usize,
 }
 
 /// A set-up Clarabel solver with the structure it was set up for.
@@ -124,6 +138,7 @@ impl ClarabelBackend {
             cache: None,
             setups: 0,
             reuse: false,
+            retries: 0,
         }
     }
 
@@ -143,6 +158,12 @@ impl ClarabelBackend {
     pub fn setups(&self) -> usize {
         self.setups
     }
+
+    /// Solves retried without equilibration since the backend was made (module
+    /// documentation, "Retry without equilibration").
+    pub fn retries(&self) -> usize {
+        self.retries
+    }
 }
 
 /// A clone has the settings and the set-up count, not the solver (it sets up its own).
@@ -153,6 +174,7 @@ impl Clone for ClarabelBackend {
             cache: None,
             setups: self.setups,
             reuse: self.reuse,
+            retries: self.retries,
         }
     }
 }
@@ -297,6 +319,20 @@ impl Conic {
 }
 
 /// Whether a fresh Clarabel solver would leave the right-hand side `b` as it is: its presolve
+/// Clarabel's settings for `s`: its tolerances (gap and feasibility), iteration and time
+/// limits, quiet; everything else Clarabel's default.
+fn clarabel_settings(s: &QpSettings) -> DefaultSettings<f64> {
+    DefaultSettings::<f64> {
+        max_iter: u32::try_from(s.max_iter).unwrap_or(u32::MAX),
+        time_limit: s.time_limit_s,
+        verbose: false,
+        tol_gap_abs: s.eps_abs,
+        tol_gap_rel: s.eps_rel.max(1e-16),
+        tol_feas: s.eps_abs,
+        ..DefaultSettings::default()
+    }
+}
+
 /// removes the nonnegative-cone rows above `(1 − 10ε)·get_infinity()` (and it caps every entry
 /// at `get_infinity()`), which a data update would not do.
 fn no_presolve(b: &[f64]) -> bool {
@@ -368,16 +404,7 @@ impl QpBackend for ClarabelBackend {
                     qp.p.rowval.clone(),
                     qp.p.nzval.clone(),
                 );
-                let s = &self.settings;
-                let settings = DefaultSettings::<f64> {
-                    max_iter: u32::try_from(s.max_iter).unwrap_or(u32::MAX),
-                    time_limit: s.time_limit_s,
-                    verbose: false,
-                    tol_gap_abs: s.eps_abs,
-                    tol_gap_rel: s.eps_rel.max(1e-16),
-                    tol_feas: s.eps_abs,
-                    ..DefaultSettings::default()
-                };
+                let settings = clarabel_settings(&self.settings);
                 self.setups += 1;
                 let solver = match DefaultSolver::new(
                     &p_c,
@@ -409,8 +436,38 @@ impl QpBackend for ClarabelBackend {
             }
         };
         solver.solve();
-        let sol = &solver.solution;
-        let iterations = sol.iterations as usize;
+        // One retry without equilibration where Clarabel stalled (module documentation,
+        // "Retry without equilibration"); a retry's solver is never kept.
+        let mut retried = None;
+        if matches!(
+            solver.solution.status,
+            SolverStatus::InsufficientProgress | SolverStatus::NumericalError
+        ) {
+            self.retries += 1;
+            self.setups += 1;
+            let p_c = ClCsc::new(
+                n,
+                n,
+                qp.p.colptr.clone(),
+                qp.p.rowval.clone(),
+                qp.p.nzval.clone(),
+            );
+            let settings = DefaultSettings {
+                equilibrate_enable: false,
+                ..clarabel_settings(&self.settings)
+            };
+            if let Ok(mut s2) =
+                DefaultSolver::new(&p_c, &qp.q, &conic.a, &conic.b, &conic.cones(), settings)
+            {
+                s2.solve();
+                retried = Some((solver.solution.iterations, s2));
+            }
+        }
+        let (sol, first_iterations) = match &retried {
+            Some((its, s2)) => (&s2.solution, *its as usize),
+            None => (&solver.solution, 0),
+        };
+        let iterations = first_iterations + sol.iterations as usize;
         if sol.x.len() != n || sol.z.len() != mc {
             return Ok(failed(iterations));
         }
