@@ -27,6 +27,7 @@
 
 pub mod backend;
 pub mod clarabel_backend;
+pub mod hash;
 pub mod ipm;
 pub mod linalg;
 pub mod osqp_backend;

@@ -30,28 +30,7 @@ use crate::qp::{CscMatrix, Qp};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-/// A multiply–rotate hash (rustc's Fx) of a row's key, far cheaper than the default SipHash;
-/// the keys are compared in full on a hash match.
-#[derive(Default)]
-struct KeyHasher(u64);
-
-impl Hasher for KeyHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut w = [0u8; 8];
-            w[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-    }
-    #[inline]
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0
-    }
-}
+use crate::hash::FxHasher as KeyHasher;
 
 /// What happened to one original row.
 #[derive(Clone, Copy, Debug, PartialEq)]

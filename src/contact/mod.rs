@@ -54,40 +54,8 @@ use rayon::prelude::*;
 
 /// The hasher of the sets of pairs that the pair searches query once per candidate (the lazy
 /// oracle's carried pairs, the SQP step's carried and seen pairs): the multiply–rotate hash of
-/// rustc's `FxHasher`, on the pair's kind and indices. It is deterministic and has no
-/// protection against adversarial keys, which mesh indices are not (the standard library's
-/// SipHash took 7% of a balloons run's profile at n = 640 in these lookups).
-#[derive(Clone, Copy, Default)]
-pub struct PairHasher(u64);
-
-const PAIR_HASH_K: u64 = 0x517c_c1b7_2722_0a95;
-
-impl std::hash::Hasher for PairHasher {
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut w = [0u8; 8];
-            w[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-    }
-    #[inline]
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(PAIR_HASH_K);
-    }
-    #[inline]
-    fn write_usize(&mut self, i: usize) {
-        self.write_u64(i as u64);
-    }
-    #[inline]
-    fn write_isize(&mut self, i: isize) {
-        self.write_u64(i as u64);
-    }
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0
-    }
-}
+/// rustc's `FxHasher` ([`contactlab_solvers::hash`]), on the pair's kind and indices.
+pub use contactlab_solvers::hash::FxHasher as PairHasher;
 
 /// A set of pairs hashed by [`PairHasher`].
 pub type PairSet =
