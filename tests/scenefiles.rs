@@ -564,15 +564,19 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         )
         .unwrap();
     }
-    let summary = |name: &str, flags: &[&str]| -> serde_json::Value {
-        let out = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+    // `contactlab run FILE --quiet --out DIR/out FLAGS`
+    let run = |name: &str, out: &str, flags: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_contactlab"))
             .arg("run")
             .arg(dir.join(name))
             .args(["--quiet", "--out"])
-            .arg(dir.join("run"))
+            .arg(dir.join(out))
             .args(flags)
             .output()
-            .unwrap();
+            .unwrap()
+    };
+    let summary = |name: &str, flags: &[&str]| -> serde_json::Value {
+        let out = run(name, "run", flags);
         assert!(
             out.status.success(),
             "{name} {flags:?}: {}",
@@ -614,14 +618,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
         // ignored: refused, naming them, whether they come from the file or from a flag
         let refused = |flags: &[&str], needles: &[&str]| {
-            let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-                .arg("run")
-                .arg(dir.join(name))
-                .args(["--quiet", "--out"])
-                .arg(dir.join("refused"))
-                .args(flags)
-                .output()
-                .unwrap();
+            let o = run(name, "refused", flags);
             let err = String::from_utf8_lossy(&o.stderr);
             assert_eq!(o.status.code(), Some(2), "{name} {flags:?}: {err}");
             for n in needles {
