@@ -988,6 +988,11 @@ impl IpBackend {
                 let mut ds: Vec<f64> = (0..mi).map(|j| gdx[j] + rp[j]).collect();
                 let mut dz: Vec<f64> = (0..mi).map(|j| (rc[j] - z[j] * ds[j]) / sl[j]).collect();
                 let mut converged = false;
+                // Gᵀ Δz, kept up to date by the row pass below (one pass over G per step)
+                let mut gtdz = vec![0.0; n];
+                if refine > 0 {
+                    split.gt_mul_add(&dz, &mut gtdz);
+                }
                 for k in 0..=refine {
                     if refine == 0 {
                         break;
@@ -996,10 +1001,9 @@ impl IpBackend {
                     let mut ra: Vec<f64> = rd.iter().map(|v| -v).collect();
                     let mut pdx = vec![0.0; n];
                     qp.p.sym_upper_mul_add(1.0, &dx, &mut pdx);
-                    for (r, v) in ra.iter_mut().zip(&pdx) {
-                        *r -= v;
+                    for ((r, v), g) in ra.iter_mut().zip(&pdx).zip(&gtdz) {
+                        *r += g - v;
                     }
-                    split.gt_mul_add(&dz, &mut ra);
                     split.et_mul_add(&dye, &mut ra);
                     let mut edx = vec![0.0; me];
                     split.e_mul(&dx, &mut edx);
@@ -1016,16 +1020,24 @@ impl IpBackend {
                     }
                     last = res;
                     f.solve(&mut corr);
-                    split.g_mul(&corr[..n], &mut gdx);
                     for (v, c) in dx.iter_mut().zip(&corr[..n]) {
                         *v += c;
                     }
                     for (v, c) in dye.iter_mut().zip(&corr[n..]) {
                         *v -= c;
                     }
+                    // per row j: g_j·corr, then Δs, Δz and Gᵀ Δz updated from the same row
                     for j in 0..mi {
-                        ds[j] += gdx[j];
-                        dz[j] -= z[j] * gdx[j] / sl[j];
+                        let (cs, vs) = split.g_row(j);
+                        let gd: f64 = cs.iter().zip(vs).map(|(&c, &v)| v * corr[c]).sum();
+                        ds[j] += gd;
+                        let ddz = -z[j] * gd / sl[j];
+                        dz[j] += ddz;
+                        if ddz != 0.0 {
+                            for (&c, &v) in cs.iter().zip(vs) {
+                                gtdz[c] += v * ddz;
+                            }
+                        }
                     }
                 }
                 (dx, dye, ds, dz, converged)
