@@ -318,7 +318,6 @@ impl Conic {
     }
 }
 
-/// Whether a fresh Clarabel solver would leave the right-hand side `b` as it is: its presolve
 /// Clarabel's settings for `s`: its tolerances (gap and feasibility), iteration and time
 /// limits, quiet; everything else Clarabel's default.
 fn clarabel_settings(s: &QpSettings) -> DefaultSettings<f64> {
@@ -333,6 +332,19 @@ fn clarabel_settings(s: &QpSettings) -> DefaultSettings<f64> {
     }
 }
 
+/// `P` (upper triangle) as Clarabel's matrix.
+fn clarabel_p(qp: &Qp) -> ClCsc<f64> {
+    let n = qp.n();
+    ClCsc::new(
+        n,
+        n,
+        qp.p.colptr.clone(),
+        qp.p.rowval.clone(),
+        qp.p.nzval.clone(),
+    )
+}
+
+/// Whether a fresh Clarabel solver would leave the right-hand side `b` as it is: its presolve
 /// removes the nonnegative-cone rows above `(1 − 10ε)·get_infinity()` (and it caps every entry
 /// at `get_infinity()`), which a data update would not do.
 fn no_presolve(b: &[f64]) -> bool {
@@ -397,13 +409,7 @@ impl QpBackend for ClarabelBackend {
         let solver = match self.cache.as_mut() {
             Some(c) => &mut c.solver,
             None => {
-                let p_c = ClCsc::new(
-                    n,
-                    n,
-                    qp.p.colptr.clone(),
-                    qp.p.rowval.clone(),
-                    qp.p.nzval.clone(),
-                );
+                let p_c = clarabel_p(qp);
                 let settings = clarabel_settings(&self.settings);
                 self.setups += 1;
                 let solver = match DefaultSolver::new(
@@ -445,13 +451,7 @@ impl QpBackend for ClarabelBackend {
         ) {
             self.retries += 1;
             self.setups += 1;
-            let p_c = ClCsc::new(
-                n,
-                n,
-                qp.p.colptr.clone(),
-                qp.p.rowval.clone(),
-                qp.p.nzval.clone(),
-            );
+            let p_c = clarabel_p(qp);
             let settings = DefaultSettings {
                 equilibrate_enable: false,
                 ..clarabel_settings(&self.settings)

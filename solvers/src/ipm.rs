@@ -1293,10 +1293,8 @@ mod tests {
         );
     }
 
-    /// Constraint reduction: with many rows far from binding that couple distant variables
-    /// (as the lazy oracle's rows for a long step do), a warm-started solve factorizes
-    /// reduced matrices and reaches the solution of the backend that factorizes the full
-    /// matrix at every iteration; without reduction no reduced matrix is factorized.
+    /// `covers`: a reduced matrix serves for the wanted rows when it holds every one of them
+    /// and at most `REUSE_SLACK` times as many.
     #[test]
     fn a_reduced_matrix_covers_a_subset_of_its_rows_not_too_much_smaller() {
         let keep = [1, 3, 4, 7];
@@ -1313,6 +1311,10 @@ mod tests {
         assert!(!covers(&keep, &want(&[4]), 1));
     }
 
+    /// Constraint reduction: with many rows far from binding that couple distant variables
+    /// (as the lazy oracle's rows for a long step do), a warm-started solve factorizes
+    /// reduced matrices and reaches the solution of the backend that factorizes the full
+    /// matrix at every iteration; without reduction no reduced matrix is factorized.
     #[test]
     fn constraint_reduction_reaches_the_full_solution() {
         let settings = tight();
