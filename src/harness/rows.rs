@@ -269,6 +269,15 @@ impl StaticRow {
         } else if let Some(last) = o.records.last() {
             row.active_rows = Some(last.active_rows);
         }
+        // What failed: the backend's status on the last step's QP.
+        if r.status == crate::solve::outer::RunStatus::SubproblemFailed {
+            if let Some(last) = o.records.last() {
+                row.error = Some(format!(
+                    "the backend ended {} on a QP of outer step {}",
+                    last.qp_status, last.iteration
+                ));
+            }
+        }
         row
     }
 }
