@@ -108,6 +108,13 @@ const REDUCE_BELOW: f64 = 1e-3;
 /// the reduced matrix.
 const REDUCE_MAX_FRACTION: f64 = 0.5;
 
+/// Constraint reduction is skipped for a QP whose rows' couplings (`Σ_j l_j(l_j − 1)/2`, the
+/// off-diagonal entries they add to `K`, over rows of `l_j` entries) are fewer than this share
+/// of `P`'s stored entries: `K` then has about `P`'s pattern, and each reduced matrix would be
+/// another copy of it (balloons at 4·10⁵ vertices with the trust region, whose box rows have
+/// one entry each: 8 reduced matrices built in two QPs).
+const REDUCE_MIN_COUPLING_SHARE: f64 = 0.01;
+
 /// After a reduced matrix that was not enough, this many iterations use the full one.
 const REDUCE_PAUSE: usize = 2;
 /// A reduced matrix is kept while the wanted rows are among its rows and number at least
@@ -785,7 +792,18 @@ impl IpBackend {
         // Constraint reduction: per inequality, |g_j|² and the smallest diagonal entry of P
         // over its columns (not needed without reduction); the rows in the reduced matrix
         // (those of a warm start's duals at first).
-        let mut reduce = reduction && mi > 0;
+        // Constraint reduction pays where the rows couple many entries of `K`; where their
+        // couplings are a small share of `P`'s entries, `K` has about `P`'s pattern and a
+        // reduced matrix would only be a second copy of it.
+        let row_couplings: usize = (0..mi)
+            .map(|j| {
+                let l = split.g_row(j).0.len();
+                l * l.saturating_sub(1) / 2
+            })
+            .sum();
+        let mut reduce = reduction
+            && mi > 0
+            && row_couplings as f64 >= REDUCE_MIN_COUPLING_SHARE * qp.p.nnz() as f64;
         let (mut gnorm2, mut pmin) = (Vec::new(), Vec::new());
         if reduce {
             let mut pdiag = vec![0.0; n];
@@ -1309,6 +1327,49 @@ mod tests {
         assert!(!covers(&keep, &want(&[3, 5]), 2));
         // more than REUSE_SLACK = 2 times as many rows as wanted
         assert!(!covers(&keep, &want(&[4]), 1));
+    }
+
+    /// Rows that add no off-diagonal entry to `K` (bounds on single variables, as a trust
+    /// box's) give no reason for a reduced matrix, however many there are: none is built, and
+    /// the solution is Clarabel's.
+    #[test]
+    fn no_reduction_where_the_rows_couple_nothing() {
+        let base = chain_qp(60);
+        let n = base.n();
+        // −1 ≤ x_k ≤ 1 on every variable: one entry per row
+        let at: Vec<(usize, usize, f64)> = (0..n).map(|k| (k, k, 1.0)).collect();
+        let qp = Qp {
+            p: base.p.clone(),
+            q: base.q.iter().map(|v| 40.0 * v).collect(),
+            a: CscMatrix::from_triplets(n, n, &at).unwrap(),
+            l: vec![-1.0; n],
+            u: vec![1.0; n],
+        };
+        let mut ip = IpBackend::new(tight());
+        let s = ip.solve(&qp, None).unwrap();
+        assert_eq!(s.status, QpStatus::Solved);
+        // some bounds bind, so the solve is not trivial
+        assert!(
+            s.x.iter().any(|v| (v.abs() - 1.0).abs() < 1e-6),
+            "{:?}",
+            s.x
+        );
+        // warm-started too (where a reduced matrix would start from the rows with a dual)
+        let w = WarmStart {
+            x: Vec::new(),
+            y: s.y.clone(),
+        };
+        assert_eq!(ip.solve(&qp, Some(&w)).unwrap().status, QpStatus::Solved);
+        assert_eq!(ip.reduced_builds(), 0);
+        assert_eq!(ip.reduction_counts().0, 0);
+        let c = ClarabelBackend::new(tight()).solve(&qp, None).unwrap();
+        let obj = |x: &[f64]| {
+            let mut px = vec![0.0; n];
+            qp.p.sym_upper_mul_add(1.0, x, &mut px);
+            0.5 * x.iter().zip(&px).map(|(a, b)| a * b).sum::<f64>()
+                + x.iter().zip(&qp.q).map(|(a, b)| a * b).sum::<f64>()
+        };
+        assert!((obj(&s.x) - obj(&c.x)).abs() <= 1e-8 * obj(&c.x).abs().max(1.0));
     }
 
     /// Constraint reduction: with many rows far from binding that couple distant variables
