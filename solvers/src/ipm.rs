@@ -57,7 +57,9 @@
 //! are not yet separated: it stalls or grows), the iteration factorizes the full `K` as
 //! before, and so do the next `REDUCE_PAUSE`; a solve that then does not end `Solved` is
 //! done again without reduction. Reduction is skipped while more than `REDUCE_MAX_FRACTION`
-//! of the rows would be in it. A reduced matrix serves again while the wanted rows are among
+//! of the rows would be in it, and for a QP whose rows add fewer off-diagonal entries to `K`
+//! than `REDUCE_MIN_COUPLING_SHARE` of `P`'s (bounds on single variables add none: `K` then
+//! has `P`'s pattern, and a reduced matrix would be another copy of its factorization). A reduced matrix serves again while the wanted rows are among
 //! its rows and number at least `1/REUSE_SLACK` of them (its other rows keep their true
 //! weights, so it is only closer to the full `K`): as the iterations separate the rows, the
 //! wanted set mostly shrinks, and building a matrix (pattern, AMD ordering, symbolic
