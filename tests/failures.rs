@@ -219,6 +219,32 @@ fn the_binary_exits_1_on_a_failure_status_with_its_outputs_written() {
         );
         assert!(dir.join("final.vtu").exists() && dir.join("history.csv").exists());
     }
+    // `subproblem_failed` names the backend's status and the outer step: Uzawa on the
+    // balloons n = 12 needs more than its 100 000 dual steps for a QP of outer step 1
+    // (docs/known-gaps.md)
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run",
+            "balloons",
+            "--n",
+            "12",
+            "--backend",
+            "uzawa",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "status subproblem_failed; the backend ended max_iterations on a QP of outer step 1"
+        ),
+        "{err}"
+    );
     // bad input stays exit 2
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
         .args(["run", "balloons", "--time-limit", "-1", "--quiet", "--out"])

@@ -605,6 +605,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         snapshots,
         monotone,
         admissible,
+        last_qp,
     } = trace;
     // The state the run returns, its last admissible iterate, whatever the status (after an
     // inadmissible or energy-increasing step the last frame is that step's iterate).
@@ -751,10 +752,15 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         bail!("run violated a guarantee: energy_monotone = {monotone}, all_iterates_admissible = {admissible}");
     }
     if res.status != RunStatus::Converged {
-        return Err(RunFinished {
-            status: res.status.as_str().into(),
+        let mut status = res.status.as_str().to_string();
+        if res.status == RunStatus::SubproblemFailed {
+            // which backend status ended it, as a sweep row's `error` says
+            status += &format!(
+                "; the backend ended {} on a QP of outer step {}",
+                last_qp.1, last_qp.0
+            );
         }
-        .into());
+        return Err(RunFinished { status }.into());
     }
     Ok(())
 }
@@ -794,6 +800,8 @@ struct Trace {
     monotone: bool,
     /// Every record admissible.
     admissible: bool,
+    /// The last record's outer step and its last QP's status.
+    last_qp: (usize, &'static str),
 }
 
 impl Default for Trace {
@@ -803,6 +811,7 @@ impl Default for Trace {
             snapshots: Vec::new(),
             monotone: true,
             admissible: true,
+            last_qp: (0, "none"),
         }
     }
 }
@@ -814,6 +823,7 @@ impl Observer<OuterLoop> for Trace {
             self.monotone &= rec.energy <= jprev;
         }
         self.admissible &= rec.admissible;
+        self.last_qp = (rec.iteration, rec.qp_status);
         self.energies.push((rec.iteration, rec.energy));
         self.snapshots.push((rec.iteration, event.x.to_vec()));
     }
