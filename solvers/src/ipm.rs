@@ -59,9 +59,10 @@
 //! done again without reduction. Reduction is skipped while more than `REDUCE_MAX_FRACTION`
 //! of the rows would be in it, and for a QP whose rows add fewer off-diagonal entries to `K`
 //! than `REDUCE_MIN_COUPLING_SHARE` of `P`'s (bounds on single variables add none: `K` then
-//! has `P`'s pattern, and a reduced matrix would be another copy of its factorization). A reduced matrix serves again while the wanted rows are among
-//! its rows and number at least `1/REUSE_SLACK` of them (its other rows keep their true
-//! weights, so it is only closer to the full `K`): as the iterations separate the rows, the
+//! has `P`'s pattern, and a reduced matrix would be another copy of its factorization). A
+//! reduced matrix serves again while the wanted rows are among its rows and number at least
+//! `1/REUSE_SLACK` of them (its other rows keep their true weights, so it is only closer to
+//! the full `K`): as the iterations separate the rows, the
 //! wanted set mostly shrinks, and building a matrix (pattern, AMD ordering, symbolic
 //! factorization) cost more than factorizing it (balloons n = 1600: 157 builds for 385
 //! reduced iterations, against 325 for 404 when every change of the wanted rows built a new
@@ -794,9 +795,7 @@ impl IpBackend {
         // Constraint reduction: per inequality, |g_j|² and the smallest diagonal entry of P
         // over its columns (not needed without reduction); the rows in the reduced matrix
         // (those of a warm start's duals at first).
-        // Constraint reduction pays where the rows couple many entries of `K`; where their
-        // couplings are a small share of `P`'s entries, `K` has about `P`'s pattern and a
-        // reduced matrix would only be a second copy of it.
+        // (none where the rows add few entries to `K`: REDUCE_MIN_COUPLING_SHARE)
         let row_couplings: usize = (0..mi)
             .map(|j| {
                 let l = split.g_row(j).0.len();

@@ -272,9 +272,9 @@ impl StaticRow {
         // What failed: the backend's status on the last step's QP.
         if r.status == crate::solve::outer::RunStatus::SubproblemFailed {
             if let Some(last) = o.records.last() {
-                row.error = Some(format!(
-                    "the backend ended {} on a QP of outer step {}",
-                    last.qp_status, last.iteration
+                row.error = Some(crate::solve::outer::subproblem_failure(
+                    last.iteration,
+                    last.qp_status,
                 ));
             }
         }

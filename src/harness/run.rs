@@ -755,10 +755,8 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         let mut status = res.status.as_str().to_string();
         if res.status == RunStatus::SubproblemFailed {
             // which backend status ended it, as a sweep row's `error` says
-            status += &format!(
-                "; the backend ended {} on a QP of outer step {}",
-                last_qp.1, last_qp.0
-            );
+            status += "; ";
+            status += &crate::solve::outer::subproblem_failure(last_qp.0, last_qp.1);
         }
         return Err(RunFinished { status }.into());
     }

@@ -197,6 +197,12 @@ impl RunStatus {
     }
 }
 
+/// What ended a `subproblem_failed` run, for its message and its sweep row: the backend's
+/// status on the last QP of outer step `iteration`.
+pub fn subproblem_failure(iteration: usize, qp_status: &str) -> String {
+    format!("the backend ended {qp_status} on a QP of outer step {iteration}")
+}
+
 /// One outer step, as emitted to observers (iteration 0 is the initial state).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct IterationRecord {
