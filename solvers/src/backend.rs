@@ -222,4 +222,9 @@ pub trait QpBackend: Send {
     /// Solves the next QPs to `eps_abs = eps_rel = tol` (ignored where
     /// [`QpBackend::tolerance`] is `None`).
     fn set_tolerance(&mut self, _tol: f64) {}
+    /// The QPs it did not solve and handed to another backend ([`crate::fallback`]); 0 for a
+    /// backend that has none behind it.
+    fn fallback_solves(&self) -> usize {
+        0
+    }
 }

@@ -27,6 +27,7 @@
 
 pub mod backend;
 pub mod clarabel_backend;
+pub mod fallback;
 pub mod hash;
 pub mod ipm;
 pub mod linalg;
@@ -42,5 +43,5 @@ pub use qp::{CscMatrix, Qp};
 pub use qps::{read_qps, read_qps_file, write_qps, write_qps_file, QpsError};
 pub use registry::{
     backend_from_name, default_settings, preset_tolerances, PresetTolerances, BACKEND_NAMES,
-    CERTIFICATE_BACKEND, CERTIFICATE_TOL, DEFAULT_BACKEND,
+    CERTIFICATE_BACKEND, CERTIFICATE_TOL, DEFAULT_BACKEND, REFERENCE_BACKEND,
 };

@@ -263,6 +263,10 @@ impl QpBackend for Presolved {
         self.inner.set_tolerance(tol);
     }
 
+    fn fallback_solves(&self) -> usize {
+        self.inner.fallback_solves()
+    }
+
     fn solve(&mut self, qp: &Qp, warm: Option<&WarmStart>) -> Result<QpSolution, QpError> {
         qp.validate()?;
         let pre = Presolve::new(qp);

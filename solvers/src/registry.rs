@@ -13,7 +13,7 @@
 //! with violation 6e-9); OSQP (ADMM, with solution polishing) at `1e-6` (at `1e-9` it needed
 //! 10⁴–10⁵ iterations per QP and hit its iteration limit near the fixed point, while at `1e-6`
 //! polishing recovers the active-set solution); `ip` (interior point on the condensed system,
-//! [`crate::ipm`]) at 1e-10 (at 1e-9 `ring` ended at a fixed point with κ 1.06e-5, above
+//! [`crate::ipm`], with Clarabel behind it for the QPs it does not solve, [`crate::fallback`]) at 1e-10 (at 1e-9 `ring` ended at a fixed point with κ 1.06e-5, above
 //! `tol_κ = 1e-5`; at 1e-10 it is certified, κ 2.7e-6). The `low` and `high` presets keep OSQP three
 //! orders looser than Clarabel.
 //!
@@ -95,13 +95,19 @@ pub const BACKENDS: [Backend; 5] = [
     },
     Backend {
         name: "ip",
-        about: "interior point on the condensed system, faer sparse LDLT",
+        about: "interior point on the condensed system, faer sparse LDLT; a QP it does not solve \
+                goes to Clarabel",
         tol: PresetTolerances {
             low: 1e-6,
             default: 1e-10,
             high: 1e-11,
         },
-        build: |s| Box::new(crate::ipm::IpBackend::new(s)),
+        build: |s| {
+            Box::new(crate::fallback::Fallback::new(
+                Box::new(crate::ipm::IpBackend::new(s.clone())),
+                Box::new(crate::clarabel_backend::ClarabelBackend::new(s)),
+            ))
+        },
     },
     Backend {
         name: "osqp",
@@ -125,9 +131,13 @@ pub const BACKENDS: [Backend; 5] = [
     },
 ];
 
-/// The backend of runs, sweeps and scene files that name none, and of the diagnostics'
-/// reference solves (the core takes it from here and never names a backend itself).
-pub const DEFAULT_BACKEND: &str = BACKENDS[0].name;
+/// The backend of runs, sweeps and scene files that name none (the core takes it from here and
+/// never names a backend itself).
+pub const DEFAULT_BACKEND: &str = BACKENDS[2].name;
+
+/// The backend of the diagnostics' reference solves (the canonical multipliers and the
+/// stationarity check of a converged run), whatever backend the run used.
+pub const REFERENCE_BACKEND: &str = BACKENDS[0].name;
 
 /// The backend of the minimality certificate's sparse path (the dual QP of its non-negative
 /// least-squares problem, `contactlab::solve::certificate`), and its tolerance
@@ -229,8 +239,8 @@ mod tests {
         assert_eq!(
             backend_list_help(),
             "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \
-             structure), ip (interior point on the condensed system, faer sparse LDLT), osqp \
-             or uzawa"
+             structure), ip (interior point on the condensed system, faer sparse LDLT; a QP it \
+             does not solve goes to Clarabel), osqp or uzawa"
         );
     }
 }

@@ -17,7 +17,7 @@ use crate::solve::outer::{run, IterationRecord, OuterSettings, Pruning, RunResul
 use crate::solve::settings::{tol_kappa, Accuracy};
 use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::Result;
-use contactlab_solvers::{backend_from_name, QpBackend, QpSettings, DEFAULT_BACKEND};
+use contactlab_solvers::{backend_from_name, QpBackend, QpSettings, REFERENCE_BACKEND};
 use std::time::Instant;
 
 /// What a case runs with.
@@ -94,7 +94,7 @@ pub fn lemma_diagnostics_with(
             eps_rel: tol,
             ..Default::default()
         };
-        let mut b = backend_from_name(DEFAULT_BACKEND, &st)?;
+        let mut b = backend_from_name(REFERENCE_BACKEND, &st)?;
         let d = converged_diagnostics(
             &scene.mesh,
             &scene.energy,
@@ -248,6 +248,9 @@ pub struct DynamicMetrics {
     pub outer_iterations: usize,
     /// The largest number of outer iterations of one step.
     pub max_outer_per_step: usize,
+    /// QPs the backend did not solve and handed to the one behind it (`ip`: Clarabel;
+    /// `contactlab_solvers::fallback`).
+    pub qp_fallbacks: usize,
     /// Wall time of the stepping.
     pub wall_time_s: f64,
 }
@@ -289,7 +292,8 @@ pub fn execute_dynamic(
         .iter()
         .any(|t| t.kind() == TermKind::Potential);
     let conserves = !has_potential && !ds.scene.mesh.fixed.iter().any(|&f| f);
-    let m = dynamic_metrics(&res, free_mass, conserves);
+    let mut m = dynamic_metrics(&res, free_mass, conserves);
+    m.qp_fallbacks = backend.fallback_solves();
     Ok((res, m))
 }
 
@@ -347,6 +351,7 @@ pub fn dynamic_metrics(res: &DynamicResult, free_mass: f64, conserves: bool) -> 
         rest: rest_force(r, REST_FRACTION),
         outer_iterations: steps.iter().map(|s| s.outer_iterations).sum(),
         max_outer_per_step: steps.iter().map(|s| s.outer_iterations).max().unwrap_or(0),
+        qp_fallbacks: 0,
         wall_time_s: res.wall_time_s,
     }
 }

@@ -257,6 +257,8 @@ struct Summary {
     qp_tol_tightened: Option<f64>,
     inner_iterations: usize,
     backend_iterations: usize,
+    /// QPs the backend did not solve and handed to the one behind it (`ip`: Clarabel).
+    qp_fallbacks: usize,
     initial_energy: f64,
     final_energy: f64,
     /// The final polish at ε (docs/method.md, "The row margin"), when it ran.
@@ -711,6 +713,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         qp_tol_tightened: res.qp_tol_tightened,
         inner_iterations: res.inner_iterations,
         backend_iterations: res.backend_iterations,
+        qp_fallbacks: backend.fallback_solves(),
         initial_energy: energies[0].1,
         final_energy: res.energy,
         polish: res.polish,

@@ -25,7 +25,7 @@ use crate::solve::outer::Pruning;
 use crate::solve::settings::{Accuracy, RunSettings};
 use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{bail, Context, Result};
-use contactlab_solvers::{BACKEND_NAMES, DEFAULT_BACKEND};
+use contactlab_solvers::{BACKEND_NAMES, DEFAULT_BACKEND, REFERENCE_BACKEND};
 use rayon::prelude::*;
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -149,7 +149,7 @@ impl EpsRule {
 #[derive(Deserialize, Clone, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceSpec {
-    /// Backend (default clarabel).
+    /// Backend (default [`REFERENCE_BACKEND`], Clarabel, whatever the runs use).
     #[serde(default = "default_ref_backend")]
     pub backend: String,
     /// Accuracy preset (default high).
@@ -161,7 +161,7 @@ pub struct ReferenceSpec {
 }
 
 fn default_ref_backend() -> String {
-    DEFAULT_BACKEND.into()
+    REFERENCE_BACKEND.into()
 }
 fn default_ref_accuracy() -> String {
     "high".into()
@@ -1172,7 +1172,8 @@ mod tests {
     #[test]
     fn sweep_sqp_model_keys_reach_the_settings_and_the_key_only_when_set() {
         let ring = |extra: &str| parse(&format!("[[scene]]\nname = \"ring\"\nn = [20]\n{extra}"));
-        let plain = "ring|n=20|eps=0.1*h^1.0||clarabel|default|lazy|tolj=preset|max=2000";
+        let plain =
+            format!("ring|n=20|eps=0.1*h^1.0||{DEFAULT_BACKEND}|default|lazy|tolj=preset|max=2000");
         // unset, or set to the defaults: the settings' defaults and the key as it was
         for extra in [
             "",
@@ -1427,7 +1428,9 @@ mod tests {
         assert_eq!(runs.len(), 4);
         assert_eq!(
             runs[0].key,
-            "collide|n=16|eps=0.1*h^1.0||dt=0.01|steps=4|euler|clarabel|default|lazy|tolj=preset|max=2000"
+            format!(
+                "collide|n=16|eps=0.1*h^1.0||dt=0.01|steps=4|euler|{DEFAULT_BACKEND}|default|lazy|tolj=preset|max=2000"
+            )
         );
         assert!(runs.iter().all(|r| r.dynamic.is_some()));
         assert_eq!(runs[3].dynamic.as_ref().unwrap().scheme, Scheme::Newmark);

@@ -143,7 +143,8 @@ impl Default for OuterSettings {
         OuterSettings {
             tol_j: 1e-10,
             tol_kappa: 1e-5,
-            qp_tol: 1e-9,
+            qp_tol: contactlab_solvers::default_settings(contactlab_solvers::DEFAULT_BACKEND)
+                .eps_abs,
             qp_in_run_units: false,
             max_outer: 2000,
             method: OuterMethod::default(),
