@@ -5,9 +5,10 @@
 #
 # Usage: bash experiments/collide_headon.sh [N ...]   (default: 16 24 32 48; the cells around
 # each ring). Environment: CONTACTLAB_BIN (default target/release/contactlab), METHODS
-# (default "pantz sqp"), EXTRA (more run flags), OUT (default results/collide_headon.csv).
+# (default "pantz sqp"), BACKEND (default clarabel, which made the committed CSV), EXTRA (more
+# run flags), OUT (default results/collide_headon.csv).
 # Each run: `contactlab run collide --dynamic --n N --param offset_cells=0 --outer-method M
-# --max-outer 2000 --quiet --frame-every 1000000` into runs/collide_headon/M-N/.
+# --backend BACKEND --max-outer 2000 --quiet --frame-every 1000000` into runs/collide_headon/M-N/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
@@ -21,7 +22,7 @@ for n in $sizes; do
     echo "collide head-on n=$n $m" >&2
     # shellcheck disable=SC2086
     "$bin" run collide --dynamic --n "$n" --param offset_cells=0 --outer-method "$m" \
-      --max-outer 2000 --quiet --frame-every 1000000 --out "$dir" ${EXTRA:-} >/dev/null \
+      --backend "${BACKEND:-clarabel}" --max-outer 2000 --quiet --frame-every 1000000 --out "$dir" ${EXTRA:-} >/dev/null \
       2>"$dir.stderr" || echo "  exit $? (see $dir.stderr)" >&2
   done
 done

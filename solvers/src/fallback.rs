@@ -123,4 +123,31 @@ mod tests {
         assert!(b.solve(&bad, None).is_err());
         assert_eq!(b.fallback_solves(), 1);
     }
+
+    #[test]
+    fn an_infeasible_qp_gets_clarabels_certificate() {
+        // x₀ ≤ 0 and x₀ ≥ 1: `ip` has no infeasibility certificate, Clarabel has
+        let p = CscMatrix::from_triplets(1, 1, &[(0, 0, 1.0)]).unwrap();
+        let a = CscMatrix::from_triplets(2, 1, &[(0, 0, 1.0), (1, 0, 1.0)]).unwrap();
+        let qp = Qp {
+            p,
+            q: vec![0.0],
+            a,
+            l: vec![f64::NEG_INFINITY, 1.0],
+            u: vec![0.0, f64::INFINITY],
+        };
+        let s = QpSettings::default();
+        let ip_alone = IpBackend::new(s.clone()).solve(&qp, None).unwrap().status;
+        assert_ne!(ip_alone, QpStatus::Solved);
+        assert_ne!(ip_alone, QpStatus::PrimalInfeasible);
+        let mut b = Fallback::new(
+            Box::new(IpBackend::new(s.clone())),
+            Box::new(ClarabelBackend::new(s)),
+        );
+        assert_eq!(
+            b.solve(&qp, None).unwrap().status,
+            QpStatus::PrimalInfeasible
+        );
+        assert_eq!(b.fallback_solves(), 1);
+    }
 }
