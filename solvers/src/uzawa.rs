@@ -27,6 +27,21 @@
 //! The crate dual is `y_i = −Σ_{k from row i} σ_k μ_k` (`σ_k = ±1` the sign of `c_k`), so that
 //! `P x + q + Aᵀ y = 0`.
 //!
+//! # Equality rows
+//!
+//! Equality rows are not dual variables of the ascent: `x(μ)` minimizes the Lagrangian of the
+//! inequality rows subject to the equality rows `E x = b` exactly, `x = y + W ν` with
+//! `y = P⁻¹(C_Iᵀμ_I − q)`, `W = P⁻¹Eᵀ` and `ν = S⁻¹(b − E y)`, `S = E P⁻¹ Eᵀ` (dense, one row
+//! and column per equality row: a few, one per gas of the shifted Newton model, whose
+//! auxiliary variables they tie to the volume). `ν` is written into the equality entries of
+//! `μ`, so the dual value, the duals returned and the stopping test read as before; the ascent,
+//! the restart test and the power iteration (on `C_I (P⁻¹ − W S⁻¹ Wᵀ) C_Iᵀ`) run over the
+//! inequality rows. As dual variables those rows' multipliers converged slowly: the shifted
+//! model scales the gas coefficients down to `1e-6·c`, and on the balloons at n = 12 a QP of
+//! the first outer step needed more than 100 000 dual steps (`subproblem_failed`); now that run
+//! converges with 9 361 dual steps in all (docs/known-gaps.md). When `S` is not numerically
+//! positive definite (dependent equality rows) they stay dual variables.
+//!
 //! # Step rule
 //!
 //! Uzawa with the optimal constant step plus momentum: `μ⁺ = Π(z − (1/L)(C x(z) − d))` where
@@ -176,6 +191,105 @@ impl Rows {
     }
 }
 
+/// The equality rows kept exactly in the inner minimization (module documentation, "Equality
+/// rows"): `W = P⁻¹Eᵀ` (one column per equality row) and the Cholesky factor of the Schur
+/// complement `S = E P⁻¹ Eᵀ`.
+struct Equalities {
+    /// Internal indices of the equality rows.
+    rows: Vec<usize>,
+    /// `W` by columns.
+    w: Vec<Vec<f64>>,
+    /// Lower Cholesky factor of `S`, row-major.
+    chol: Vec<f64>,
+}
+
+impl Equalities {
+    /// `None` when there are no equality rows or `S` is not numerically positive definite
+    /// (dependent rows): the equality multipliers are then dual variables like the others.
+    fn new(rows: &Rows, ldl: &SparseLdl, n: usize) -> Option<Equalities> {
+        let idx: Vec<usize> = (0..rows.len()).filter(|&k| rows.eq[k]).collect();
+        if idx.is_empty() {
+            return None;
+        }
+        let me = idx.len();
+        let mut e = vec![0.0; rows.len()];
+        let mut w = Vec::with_capacity(me);
+        for &k in &idx {
+            e[k] = 1.0;
+            let mut col = vec![0.0; n];
+            rows.tr_mul_add(&e, &mut col);
+            ldl.solve_in_place(&mut col);
+            e[k] = 0.0;
+            w.push(col);
+        }
+        let mut ew = vec![0.0; rows.len()];
+        let mut chol = vec![0.0; me * me];
+        for (b, col) in w.iter().enumerate() {
+            rows.mul(col, &mut ew);
+            for (a, &k) in idx.iter().enumerate() {
+                chol[a * me + b] = ew[k];
+            }
+        }
+        let scale = (0..me).map(|a| chol[a * me + a].abs()).fold(0.0, f64::max);
+        for j in 0..me {
+            let mut d = chol[j * me + j];
+            for k in 0..j {
+                d -= chol[j * me + k] * chol[j * me + k];
+            }
+            if !(d > 1e-12 * scale) {
+                return None;
+            }
+            let d = d.sqrt();
+            chol[j * me + j] = d;
+            for i in j + 1..me {
+                let mut v = chol[i * me + j];
+                for k in 0..j {
+                    v -= chol[i * me + k] * chol[j * me + k];
+                }
+                chol[i * me + j] = v / d;
+            }
+        }
+        Some(Equalities { rows: idx, w, chol })
+    }
+
+    /// Given `x = P⁻¹(Cᵀμ − q)` computed with the equality multipliers at 0, adds `W ν` with
+    /// `ν = S⁻¹(b − E x)` so that `E x = b`, and writes `ν` into `mu`'s equality entries.
+    /// With `rhs = false` it projects a direction instead (`b = 0`).
+    fn correct(&self, rows: &Rows, x: &mut [f64], mu: &mut [f64], rhs: bool) {
+        let me = self.rows.len();
+        let mut nu: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|&k| {
+                let i = rows.orig[k];
+                let mut ex = 0.0;
+                for p in rows.at.colptr[i]..rows.at.colptr[i + 1] {
+                    ex += rows.at.nzval[p] * x[rows.at.rowval[p]];
+                }
+                (if rhs { rows.d[k] } else { 0.0 }) - rows.sign[k] * ex
+            })
+            .collect();
+        for i in 0..me {
+            for k in 0..i {
+                nu[i] -= self.chol[i * me + k] * nu[k];
+            }
+            nu[i] /= self.chol[i * me + i];
+        }
+        for i in (0..me).rev() {
+            for k in i + 1..me {
+                nu[i] -= self.chol[k * me + i] * nu[k];
+            }
+            nu[i] /= self.chol[i * me + i];
+        }
+        for (a, &k) in self.rows.iter().enumerate() {
+            for (xj, wj) in x.iter_mut().zip(&self.w[a]) {
+                *xj += nu[a] * wj;
+            }
+            mu[k] = nu[a];
+        }
+    }
+}
+
 fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
@@ -231,13 +345,23 @@ impl QpBackend for UzawaBackend {
         };
         let rows = Rows::new(qp);
         let mi = rows.len();
-        // x(μ) = P⁻¹(Cᵀμ − q).
-        let x_of = |mu: &[f64], x: &mut [f64]| {
+        let eqs = Equalities::new(&rows, &ldl, n);
+        // x(μ) = P⁻¹(Cᵀμ − q); with the equality rows eliminated, the minimizer subject to
+        // them, whose multipliers are written into μ's equality entries.
+        let x_of = |mu: &mut [f64], x: &mut [f64]| {
             for (xi, qi) in x.iter_mut().zip(&qp.q) {
                 *xi = -qi;
             }
+            if let Some(e) = &eqs {
+                for &k in &e.rows {
+                    mu[k] = 0.0;
+                }
+            }
             rows.tr_mul_add(mu, x);
             ldl.solve_in_place(x);
+            if let Some(e) = &eqs {
+                e.correct(&rows, x, mu, true);
+            }
         };
         let to_y = |mu: &[f64]| {
             let mut y = vec![0.0; m];
@@ -257,7 +381,7 @@ impl QpBackend for UzawaBackend {
             rows.project(&mut mu);
         }
         let mut x = vec![0.0; n];
-        x_of(&mu, &mut x);
+        x_of(&mut mu, &mut x);
         if mi == 0 {
             let y = to_y(&mu);
             return Ok(finish(x, y, QpStatus::Solved, 0));
@@ -274,9 +398,23 @@ impl QpBackend for UzawaBackend {
             let nv = inf_norm(&v).max(f64::MIN_POSITIVE);
             v.iter_mut().for_each(|e| *e /= nv);
             w.iter_mut().for_each(|e| *e = 0.0);
+            if let Some(e) = &eqs {
+                for &k in &e.rows {
+                    v[k] = 0.0;
+                }
+            }
             rows.tr_mul_add(&v, &mut w);
             ldl.solve_in_place(&mut w);
+            if let Some(e) = &eqs {
+                let mut scratch = vec![0.0; mi];
+                e.correct(&rows, &mut w, &mut scratch, false);
+            }
             rows.mul(&w, &mut cv);
+            if let Some(e) = &eqs {
+                for &k in &e.rows {
+                    cv[k] = 0.0;
+                }
+            }
             let n2v = dot(&v, &v).sqrt();
             lam = dot(&cv, &cv).sqrt() / n2v.max(f64::MIN_POSITIVE);
             if !(lam.is_finite() && lam > 0.0) {
@@ -349,7 +487,7 @@ impl QpBackend for UzawaBackend {
                 mu_new[k] = z[k] - step * (s[k] - rows.d[k]);
             }
             rows.project(&mut mu_new);
-            x_of(&mu_new, &mut x_new);
+            x_of(&mut mu_new, &mut x_new);
             rows.mul(&x_new, &mut s);
             s.iter_mut().zip(&rows.d).for_each(|(a, b)| *a -= b);
             if x_new.iter().any(|v| !v.is_finite()) {
@@ -423,7 +561,9 @@ impl QpBackend for UzawaBackend {
             if !restart {
                 let mut g = 0.0;
                 for k in 0..mi {
-                    g += (mu_new[k] - z[k]) * (mu_new[k] - mu[k]);
+                    if eqs.is_none() || !rows.eq[k] {
+                        g += (mu_new[k] - z[k]) * (mu_new[k] - mu[k]);
+                    }
                 }
                 restart = g < 0.0;
             }
@@ -511,5 +651,36 @@ mod tests {
         assert_eq!(s.status, QpStatus::MaxIterations);
         assert_eq!(s.iterations, 1);
         assert_eq!((s.x.len(), s.y.len()), (2, 3));
+    }
+
+    #[test]
+    fn an_ill_scaled_equality_row_is_kept_exactly() {
+        // min ½|x|² + (1e-4 − 1)x₀ s.t. 1e-4·x₀ = 1e-4 (an equality row scaled as the gas rows
+        // of the shifted Newton model) and x₁ ≥ 1: x = (1, 1), y = (−1, −1). As a dual variable
+        // the equality multiplier has curvature 1e-8 against 1 for the other row.
+        let p = CscMatrix::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0)]).unwrap();
+        let a = CscMatrix::from_triplets(2, 2, &[(0, 0, 1e-4), (1, 1, 1.0)]).unwrap();
+        let qp = Qp {
+            p,
+            q: vec![1e-4 - 1.0, 0.0],
+            a,
+            l: vec![1e-4, 1.0],
+            u: vec![1e-4, f64::INFINITY],
+        };
+        let sol = UzawaBackend::new(QpSettings::default())
+            .solve(&qp, None)
+            .unwrap();
+        assert_eq!(sol.status, QpStatus::Solved);
+        assert!(sol.iterations <= 10, "{} dual steps", sol.iterations);
+        assert!(
+            (sol.x[0] - 1.0).abs() < 1e-9 && (sol.x[1] - 1.0).abs() < 1e-8,
+            "{:?}",
+            sol.x
+        );
+        assert!(
+            (sol.y[0] + 1.0).abs() < 1e-6 && (sol.y[1] + 1.0).abs() < 1e-8,
+            "{:?}",
+            sol.y
+        );
     }
 }
