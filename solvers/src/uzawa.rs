@@ -236,7 +236,7 @@ impl Equalities {
             for k in 0..j {
                 d -= chol[j * me + k] * chol[j * me + k];
             }
-            if !(d > 1e-12 * scale) {
+            if d.is_nan() || d <= 1e-12 * scale {
                 return None;
             }
             let d = d.sqrt();
