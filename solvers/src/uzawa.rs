@@ -40,7 +40,8 @@
 //! model scales the gas coefficients down to `1e-6·c`, and on the balloons at n = 12 a QP of
 //! the first outer step needed more than 100 000 dual steps (`subproblem_failed`); now that run
 //! converges with 9 361 dual steps in all (docs/known-gaps.md). When `S` is not numerically
-//! positive definite (dependent equality rows) they stay dual variables.
+//! positive definite (dependent equality rows), or there are more than
+//! `MAX_ELIMINATED_EQUALITIES` of them, they stay dual variables.
 //!
 //! # Step rule
 //!
@@ -191,6 +192,10 @@ impl Rows {
     }
 }
 
+/// At most this many equality rows are kept exactly (`W` is dense, `n` by their count, and `S`
+/// is factorized densely); a QP with more keeps them as dual variables.
+const MAX_ELIMINATED_EQUALITIES: usize = 64;
+
 /// The equality rows kept exactly in the inner minimization (module documentation, "Equality
 /// rows"): `W = P⁻¹Eᵀ` (one column per equality row) and the Cholesky factor of the Schur
 /// complement `S = E P⁻¹ Eᵀ`.
@@ -208,7 +213,7 @@ impl Equalities {
     /// (dependent rows): the equality multipliers are then dual variables like the others.
     fn new(rows: &Rows, ldl: &SparseLdl, n: usize) -> Option<Equalities> {
         let idx: Vec<usize> = (0..rows.len()).filter(|&k| rows.eq[k]).collect();
-        if idx.is_empty() {
+        if idx.is_empty() || idx.len() > MAX_ELIMINATED_EQUALITIES {
             return None;
         }
         let me = idx.len();
