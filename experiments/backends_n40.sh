@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The three backends' agreement check: the default balloons scene (n = 40) with each backend at its
+# The backends' agreement check: the default balloons scene (n = 40) with each backend at its
 # default tolerance; prints final energy, state and status of each, and the largest relative
 # energy difference. Usage: bash experiments/backends_n40.sh [N]
 set -euo pipefail
@@ -8,14 +8,14 @@ source scripts/ensure-cmake.sh
 n=${1:-40}
 [ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
-for b in clarabel osqp uzawa; do
+for b in clarabel ip osqp uzawa; do
   [ -f runs/n$n-$b/summary.json ] || $bin run balloons --n "$n" --backend $b --quiet --frame-every 1000000 --out runs/n$n-$b >&2 || true
 done
 python3 - "$n" <<'PY'
 import json, os, sys
 n = sys.argv[1]
 rows = []
-for b in ["clarabel", "osqp", "uzawa"]:
+for b in ["clarabel", "ip", "osqp", "uzawa"]:
     f = f"runs/n{n}-{b}/summary.json"
     if os.path.exists(f):
         s = json.load(open(f))
