@@ -234,13 +234,13 @@ impl IpBackend {
 }
 
 /// The constraints in one-sided form.
-struct Split {
+pub(crate) struct Split {
     /// Inequality constraints `g_j·x ≥ h_j`: (row of `A`, sign ±1), and `h_j`.
-    ineq: Vec<(usize, f64)>,
-    h: Vec<f64>,
+    pub(crate) ineq: Vec<(usize, f64)>,
+    pub(crate) h: Vec<f64>,
     /// Equality rows of `A` and their right-hand sides.
-    eq: Vec<usize>,
-    b: Vec<f64>,
+    pub(crate) eq: Vec<usize>,
+    pub(crate) b: Vec<f64>,
     /// `G` by rows (CSR, the sign folded in).
     g_ptr: Vec<usize>,
     g_col: Vec<usize>,
@@ -276,7 +276,7 @@ fn csr_tr_mul_add(ptr: &[usize], col: &[usize], val: &[f64], w: &[f64], out: &mu
 }
 
 impl Split {
-    fn new(qp: &Qp) -> Split {
+    pub(crate) fn new(qp: &Qp) -> Split {
         let (n, m) = (qp.n(), qp.m());
         let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
         for j in 0..n {
@@ -331,7 +331,7 @@ impl Split {
     }
 
     /// The same equality rows and the inequality constraints `keep` only (in that order).
-    fn subset(&self, keep: &[usize]) -> Split {
+    pub(crate) fn subset(&self, keep: &[usize]) -> Split {
         let (mut g_ptr, mut g_col, mut g_val) = (vec![0], Vec::new(), Vec::new());
         for &j in keep {
             let (cs, vs) = self.g_row(j);
@@ -354,28 +354,28 @@ impl Split {
     }
 
     /// The entries of inequality constraint `j`: (columns, values with the sign).
-    fn g_row(&self, j: usize) -> (&[usize], &[f64]) {
+    pub(crate) fn g_row(&self, j: usize) -> (&[usize], &[f64]) {
         let r = self.g_ptr[j]..self.g_ptr[j + 1];
         (&self.g_col[r.clone()], &self.g_val[r])
     }
 
     /// `G x` into `out`.
-    fn g_mul(&self, x: &[f64], out: &mut [f64]) {
+    pub(crate) fn g_mul(&self, x: &[f64], out: &mut [f64]) {
         csr_mul(&self.g_ptr, &self.g_col, &self.g_val, x, out);
     }
 
     /// `out += Gᵀ w`.
-    fn gt_mul_add(&self, w: &[f64], out: &mut [f64]) {
+    pub(crate) fn gt_mul_add(&self, w: &[f64], out: &mut [f64]) {
         csr_tr_mul_add(&self.g_ptr, &self.g_col, &self.g_val, w, out);
     }
 
     /// `E x` into `out`.
-    fn e_mul(&self, x: &[f64], out: &mut [f64]) {
+    pub(crate) fn e_mul(&self, x: &[f64], out: &mut [f64]) {
         csr_mul(&self.e_ptr, &self.e_col, &self.e_val, x, out);
     }
 
     /// `out += Eᵀ w`.
-    fn et_mul_add(&self, w: &[f64], out: &mut [f64]) {
+    pub(crate) fn et_mul_add(&self, w: &[f64], out: &mut [f64]) {
         csr_tr_mul_add(&self.e_ptr, &self.e_col, &self.e_val, w, out);
     }
 }
@@ -383,7 +383,7 @@ impl Split {
 /// The pattern of the last QP's condensed matrix and its symbolic factorization (AMD
 /// ordering, elimination tree), kept by the backend between solves.
 #[derive(Debug)]
-struct SymbolicCache {
+pub(crate) struct SymbolicCache {
     colptr: Vec<usize>,
     rowval: Vec<usize>,
     symbolic: Arc<SymbolicCholesky<usize>>,
@@ -393,7 +393,7 @@ struct SymbolicCache {
 
 /// The condensed matrix `K` (upper triangle, CSC, `n + m_E` columns): its pattern, where each
 /// contribution goes, its factorization.
-struct Kkt {
+pub(crate) struct Kkt {
     n: usize,
     dim: usize,
     colptr: Vec<usize>,
@@ -418,7 +418,7 @@ struct Kkt {
 impl Kkt {
     /// `cache`: the last QP's pattern and symbolic factorization, reused when this QP's
     /// pattern is the same (and replaced otherwise).
-    fn new(qp: &Qp, split: &Split, cache: &mut Option<SymbolicCache>) -> Option<Kkt> {
+    pub(crate) fn new(qp: &Qp, split: &Split, cache: &mut Option<SymbolicCache>) -> Option<Kkt> {
         let n = qp.n();
         let me = split.eq.len();
         let dim = n + me;
@@ -579,7 +579,7 @@ impl Kkt {
 
     /// The values of `K` for the weights `d` (`D`), with `reg` added to the `x` block's
     /// diagonal and `−reg_e` to the equality block's.
-    fn values(&self, qp: &Qp, d: &[f64], reg: f64, reg_e: f64) -> Vec<f64> {
+    pub(crate) fn values(&self, qp: &Qp, d: &[f64], reg: f64, reg_e: f64) -> Vec<f64> {
         let mut v = vec![0.0; self.rowval.len()];
         for (&p, &val) in self.p_pos.iter().zip(&qp.p.nzval) {
             v[p] += val;
@@ -599,7 +599,7 @@ impl Kkt {
     }
 
     /// `K v` (upper-triangle storage, symmetric product).
-    fn mul(&self, vals: &[f64], x: &[f64]) -> Vec<f64> {
+    pub(crate) fn mul(&self, vals: &[f64], x: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; self.dim];
         for j in 0..self.dim {
             for p in self.colptr[j]..self.colptr[j + 1] {
@@ -614,7 +614,7 @@ impl Kkt {
     }
 
     /// Factorizes `vals`; false when the factorization fails.
-    fn factor(&mut self, vals: &[f64], delta: f64) -> bool {
+    pub(crate) fn factor(&mut self, vals: &[f64], delta: f64) -> bool {
         let mat = SparseColMatRef::new(self.sym_mat.as_ref(), vals);
         let reg = LdltRegularization {
             dynamic_regularization_signs: Some(&self.signs),
@@ -635,7 +635,7 @@ impl Kkt {
     }
 
     /// Solves with the factorization in place.
-    fn solve(&mut self, rhs: &mut [f64]) {
+    pub(crate) fn solve(&mut self, rhs: &mut [f64]) {
         let ldlt = faer::sparse::linalg::cholesky::LdltRef::new(&self.symbolic, &self.lvals);
         let n = rhs.len();
         let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
@@ -644,7 +644,7 @@ impl Kkt {
 
     /// Solves `K_true Δ = rhs` with the factorization of the regularized `K` and two steps of
     /// iterative refinement against `K_true` (`vals_true`).
-    fn solve_refined(&mut self, vals_true: &[f64], rhs: &[f64]) -> Vec<f64> {
+    pub(crate) fn solve_refined(&mut self, vals_true: &[f64], rhs: &[f64]) -> Vec<f64> {
         let mut x = rhs.to_vec();
         self.solve(&mut x);
         for _ in 0..2 {
@@ -1183,7 +1183,7 @@ impl IpBackend {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::clarabel_backend::ClarabelBackend;
     use crate::qp::tests::{
@@ -1210,7 +1210,7 @@ mod tests {
     /// neighbours (a tridiagonal `P` per component), two-point contact rows `x_{2i+1} ≥ −1`,
     /// duplicated rows and rows coupling neighbours: the structure of the contact QPs. Clarabel
     /// and `ip` must agree on the objective and the solution.
-    fn chain_qp(n: usize) -> Qp {
+    pub(crate) fn chain_qp(n: usize) -> Qp {
         let dim = 2 * n;
         let mut pt = Vec::new();
         for c in 0..2 {
@@ -1248,7 +1248,7 @@ mod tests {
     }
 
     /// The settings of the tests below: both tolerances at 1e-10.
-    fn tight() -> QpSettings {
+    pub(crate) fn tight() -> QpSettings {
         QpSettings {
             eps_abs: 1e-10,
             eps_rel: 1e-10,

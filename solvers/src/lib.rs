@@ -25,6 +25,7 @@
 // Index loops over several parallel arrays are the clearest form for the sparse kernels here.
 #![allow(clippy::needless_range_loop)]
 
+pub mod active_set;
 pub mod backend;
 pub mod clarabel_backend;
 pub mod fallback;

@@ -72,7 +72,7 @@ pub struct Backend {
 }
 
 /// Every backend, in the order of help texts and sweeps.
-pub const BACKENDS: [Backend; 5] = [
+pub const BACKENDS: [Backend; 6] = [
     Backend {
         name: "clarabel",
         about: "",
@@ -105,6 +105,22 @@ pub const BACKENDS: [Backend; 5] = [
         build: |s| {
             Box::new(crate::fallback::Fallback::new(
                 Box::new(crate::ipm::IpBackend::new(s.clone())),
+                Box::new(crate::clarabel_backend::ClarabelBackend::new(s)),
+            ))
+        },
+    },
+    Backend {
+        name: "active-set",
+        about: "primal-dual active set from the warm start's duals; a QP it does not solve goes \
+                to ip, then Clarabel",
+        tol: PresetTolerances {
+            low: 1e-6,
+            default: 1e-10,
+            high: 1e-11,
+        },
+        build: |s| {
+            Box::new(crate::fallback::Fallback::new(
+                Box::new(crate::active_set::ActiveSetBackend::new(s.clone())),
                 Box::new(crate::clarabel_backend::ClarabelBackend::new(s)),
             ))
         },
@@ -231,7 +247,8 @@ mod tests {
             .expect("gurobi is not registered");
         assert_eq!(
             e.to_string(),
-            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, ip, osqp, uzawa)"
+            "unknown backend \"gurobi\" (expected one of clarabel, clarabel-reuse, ip, active-set, osqp, \
+             uzawa)"
         );
         for name in BACKEND_NAMES {
             assert!(e.to_string().contains(name), "{name}");
@@ -240,7 +257,8 @@ mod tests {
             backend_list_help(),
             "clarabel, clarabel-reuse (Clarabel keeping its solver between QPs of one \
              structure), ip (interior point on the condensed system, faer sparse LDLT; a QP it \
-             does not solve goes to Clarabel), osqp or uzawa"
+             does not solve goes to Clarabel), active-set (primal-dual active set from the warm \
+             start's duals; a QP it does not solve goes to ip, then Clarabel), osqp or uzawa"
         );
     }
 }
