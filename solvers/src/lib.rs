@@ -1,4 +1,4 @@
-//! QP standard form, the backend trait and the three sub-problem backends of contactlab.
+//! QP standard form, the backend trait and the sub-problem backends of contactlab.
 //!
 //! Every backend solves the same problem
 //!
