@@ -44,6 +44,7 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         outer_method: Default::default(),
         sqp_curvature: Default::default(),
         sqp_normal_stiffness: 0.0,
+        sqp_drop_endpoint_rows: false,
         time_limit_s: None,
     };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();

@@ -670,4 +670,23 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         err.contains("--sqp-curvature full set with the pantz outer method"),
         "{err}"
     );
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run",
+            "ring",
+            "--n",
+            "12",
+            "--quiet",
+            "--sqp-drop-endpoint-rows",
+            "--out",
+        ])
+        .arg(dir.join("refused_ring_drop"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--sqp-drop-endpoint-rows set with the pantz outer method"),
+        "{err}"
+    );
 }

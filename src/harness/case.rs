@@ -48,6 +48,8 @@ pub struct CaseSettings {
     /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0; used by `outer_method`
     /// sqp).
     pub sqp_normal_stiffness: f64,
+    /// SQP, 2D: leave out the rows implied by another row of the same vertex.
+    pub sqp_drop_endpoint_rows: bool,
 }
 
 /// A finished case.
@@ -137,6 +139,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.method = cs.outer_method;
     settings.sqp.curvature = cs.sqp_curvature;
     settings.sqp.normal_stiffness = cs.sqp_normal_stiffness;
+    settings.sqp.drop_endpoint_rows = cs.sqp_drop_endpoint_rows;
     settings
 }
 

@@ -177,6 +177,7 @@ fn run_prepared(
         outer_method: rs.outer_method,
         sqp_curvature: rs.sqp_curvature,
         sqp_normal_stiffness: rs.sqp_normal_stiffness,
+        sqp_drop_endpoint_rows: rs.sqp_drop_endpoint_rows,
     };
     let qps = rs.qp_settings();
     let out = a

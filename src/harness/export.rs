@@ -73,6 +73,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         outer_method: Default::default(),
         sqp_curvature: Default::default(),
         sqp_normal_stiffness: 0.0,
+        sqp_drop_endpoint_rows: false,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -104,6 +104,12 @@ pub struct RunArgs {
     /// positive multiplier at the last step (0: none). docs/method.md, "The SQP outer method".
     #[arg(long, default_value_t = 0.0, value_parser = parse_normal_stiffness)]
     pub sqp_normal_stiffness: f64,
+    /// With --outer-method sqp, 2D: leave out of the QP a vertex's row whose closest point is
+    /// an endpoint of its edge when the vertex's row against the other edge at that endpoint
+    /// has its closest point inside that edge (implied in the true geometry; linearized, it
+    /// cuts the sliding). docs/method.md, "The SQP outer method".
+    #[arg(long)]
+    pub sqp_drop_endpoint_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -351,6 +357,7 @@ fn scene_from_file(
         }
     }
     from_file!("sqp_normal_stiffness", sqp_normal_stiffness);
+    from_file!("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -379,6 +386,7 @@ impl RunArgs {
             outer_method: self.outer_method,
             sqp_curvature: Curvature::from_name(&self.sqp_curvature).unwrap_or_default(),
             sqp_normal_stiffness: self.sqp_normal_stiffness,
+            sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
         }
     }
 }
@@ -402,15 +410,21 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_normal_stiffness != 0.0,
                 settings.sqp_normal_stiffness.to_string(),
             ),
+            (
+                "--sqp-drop-endpoint-rows",
+                settings.sqp_drop_endpoint_rows,
+                String::new(),
+            ),
         ]
         .into_iter()
-        .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}")))
+        .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
         .collect();
         if !set.is_empty() {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
-                 --sqp-normal-stiffness, or sqp_curvature and sqp_normal_stiffness in a scene \
-                 file's [solver]) apply to --outer-method sqp only",
+                 --sqp-normal-stiffness, --sqp-drop-endpoint-rows, or sqp_curvature, \
+                 sqp_normal_stiffness and sqp_drop_endpoint_rows in a scene file's [solver]) \
+                 apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );

@@ -160,6 +160,9 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_normal_stiffness {
         s.sqp_normal_stiffness = v;
     }
+    if let Some(v) = spec.sqp_drop_endpoint_rows {
+        s.sqp_drop_endpoint_rows = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }

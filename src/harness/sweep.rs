@@ -198,6 +198,9 @@ pub struct Common {
     /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0, default 0; with
     /// `outer_method = "sqp"` only).
     pub sqp_normal_stiffness: Option<f64>,
+    /// SQP, 2D: leave out the rows implied by another row of the same vertex (default false;
+    /// with `outer_method = "sqp"` only).
+    pub sqp_drop_endpoint_rows: Option<bool>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -397,6 +400,7 @@ struct BlockSettings {
     outer_method: OuterMethod,
     sqp_curvature: Curvature,
     sqp_normal_stiffness: f64,
+    sqp_drop_endpoint_rows: bool,
     reference: Option<ReferenceSpec>,
 }
 
@@ -459,6 +463,10 @@ impl BlockSettings {
             .sqp_normal_stiffness
             .or(defaults.sqp_normal_stiffness)
             .unwrap_or(0.0);
+        let sqp_drop_endpoint_rows = c
+            .sqp_drop_endpoint_rows
+            .or(defaults.sqp_drop_endpoint_rows)
+            .unwrap_or(false);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -493,14 +501,16 @@ impl BlockSettings {
             let set: Vec<&str> = [
                 ("sqp_curvature", sqp_curvature != Curvature::default()),
                 ("sqp_normal_stiffness", sqp_normal_stiffness != 0.0),
+                ("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
             .collect();
             if !set.is_empty() {
                 bail!(
-                    "{at}: {} set with outer_method = {:?}: sqp_curvature and \
-                     sqp_normal_stiffness apply to outer_method = \"sqp\" only",
+                    "{at}: {} set with outer_method = {:?}: sqp_curvature, \
+                     sqp_normal_stiffness and sqp_drop_endpoint_rows apply to outer_method = \
+                     \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
@@ -546,6 +556,7 @@ impl BlockSettings {
             outer_method,
             sqp_curvature,
             sqp_normal_stiffness,
+            sqp_drop_endpoint_rows,
             reference,
         })
     }
@@ -575,6 +586,7 @@ impl BlockSettings {
             outer_method: self.outer_method,
             sqp_curvature: self.sqp_curvature,
             sqp_normal_stiffness: self.sqp_normal_stiffness,
+            sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -596,12 +608,13 @@ impl BlockSettings {
 /// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
-/// than `off` and an SQP normal stiffness other than 0 only when set, so that the keys of
+/// than `off`, an SQP normal stiffness other than 0 and the SQP's dropped endpoint rows only
+/// when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -636,6 +649,11 @@ fn run_key(spec: &RunSpec) -> String {
             String::new()
         } else {
             format!("|gamma={:?}", s.sqp_normal_stiffness)
+        },
+        if s.sqp_drop_endpoint_rows {
+            "|drop-endpoint-rows"
+        } else {
+            ""
         }
     )
 }
@@ -882,6 +900,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         // group, whichever model its group's runs use
         sqp_curvature: Default::default(),
         sqp_normal_stiffness: 0.0,
+        sqp_drop_endpoint_rows: false,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,

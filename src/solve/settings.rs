@@ -133,6 +133,9 @@ pub struct RunSettings {
     /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`; finite,
     /// ≥ 0).
     pub sqp_normal_stiffness: f64,
+    /// SQP, 2D: leave out the rows implied by another row of the same vertex
+    /// (`--sqp-drop-endpoint-rows`).
+    pub sqp_drop_endpoint_rows: bool,
 }
 
 impl Default for RunSettings {
@@ -154,6 +157,7 @@ impl Default for RunSettings {
             outer_method: outer.method,
             sqp_curvature: outer.sqp.curvature,
             sqp_normal_stiffness: outer.sqp.normal_stiffness,
+            sqp_drop_endpoint_rows: outer.sqp.drop_endpoint_rows,
         }
     }
 }
@@ -286,6 +290,7 @@ impl RunSettings {
         settings.method = self.outer_method;
         settings.sqp.curvature = self.sqp_curvature;
         settings.sqp.normal_stiffness = self.sqp_normal_stiffness;
+        settings.sqp.drop_endpoint_rows = self.sqp_drop_endpoint_rows;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

@@ -129,6 +129,9 @@ pub struct SqpSettings {
     /// `γ`: the model gets `γ·max diag(H)·∇d_k∇d_kᵀ` for each pair with a positive multiplier
     /// at the last step (0: none).
     pub normal_stiffness: f64,
+    /// 2D: leave out of the QP the rows implied by another row of the same vertex
+    /// ([`endpoint_row_implied`]; `--sqp-drop-endpoint-rows`).
+    pub drop_endpoint_rows: bool,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -198,6 +201,7 @@ impl Default for SqpSettings {
             corrections: 3,
             curvature: Curvature::default(),
             normal_stiffness: 0.0,
+            drop_endpoint_rows: false,
         }
     }
 }
@@ -497,6 +501,33 @@ pub(crate) fn normal_triplets(
 /// One SQP step from the admissible `x` (J(x) = `jx`): the QP on the linearized rows, then the
 /// line search with its correction and checks (module documentation). `warm`: the last
 /// multiplier of each pair; `shift`: the Newton model's shift, kept from step to step.
+/// A 2D row whose closest point is an endpoint `v` of its edge, where the same vertex has a
+/// row against another edge at `v` with its closest point inside that edge: in the true
+/// geometry the first distance is at least the second (`v` lies on the other edge), so the
+/// row is implied; linearized, it is the distance to the point `v`, a convex function whose
+/// linearization cuts tangential motion towards `v`.
+fn endpoint_row_implied(
+    mesh: &Mesh,
+    r: &PairRows,
+    interior: &PairSet,
+    vertex_edges: &[Vec<usize>],
+) -> bool {
+    let ContactPair::PointEdge { x, a } = r.pair else {
+        return false;
+    };
+    let e = mesh.edges[a];
+    let v = if r.weight[0] >= 1.0 - 1e-12 {
+        e[0]
+    } else if r.weight[1] >= 1.0 - 1e-12 {
+        e[1]
+    } else {
+        return false;
+    };
+    vertex_edges[v]
+        .iter()
+        .any(|&b| b != a && interior.contains(&ContactPair::PointEdge { x, a: b }))
+}
+
 pub(crate) fn sqp_step(
     ctx: &SqpContext,
     x: &[f64],
@@ -525,6 +556,21 @@ pub(crate) fn sqp_step(
         .filter_map(|p| pair_rows(mesh, x, p))
         .collect();
     let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
+    let drop_implied = ctx.sqp.drop_endpoint_rows && dim == 2;
+    let mut vertex_edges: Vec<Vec<usize>> = Vec::new();
+    if drop_implied {
+        vertex_edges = vec![Vec::new(); mesh.x_ref.len() / dim];
+        for (k, e) in mesh.edges.iter().enumerate() {
+            vertex_edges[e[0]].push(k);
+            vertex_edges[e[1]].push(k);
+        }
+        let interior: PairSet = rows
+            .iter()
+            .filter(|r| r.weight[0] > 1e-12 && r.weight[1] > 1e-12)
+            .map(|r| r.pair)
+            .collect();
+        rows.retain(|r| !endpoint_row_implied(mesh, r, &interior, &vertex_edges));
+    }
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
     // The constraints' curvature with the last step's multipliers (none at the first step).
@@ -585,6 +631,26 @@ pub(crate) fn sqp_step(
         if violated.is_empty() {
             break (qp, sol);
         }
+        let violated: Vec<(PairRows, f64)> = if drop_implied {
+            let interior: PairSet = rows
+                .iter()
+                .chain(violated.iter().map(|(r, _)| r))
+                .filter(|r| r.weight[0] > 1e-12 && r.weight[1] > 1e-12)
+                .map(|r| r.pair)
+                .collect();
+            let (implied, kept): (Vec<_>, Vec<_>) = violated
+                .into_iter()
+                .partition(|(r, _)| endpoint_row_implied(mesh, r, &interior, &vertex_edges));
+            for (r, _) in &implied {
+                carried.insert(r.pair);
+            }
+            if kept.is_empty() {
+                break (qp, sol);
+            }
+            kept
+        } else {
+            violated
+        };
         let pick = most_violated_per_point(violated.iter().map(|(r, v)| (r.pair, *v)));
         let nold = rows.len();
         for i in pick {
@@ -791,6 +857,105 @@ mod tests {
         }
         assert_eq!(res.sqp_steps + res.fallback_steps, res.outer_iterations);
         (records, res.status, res.certificate.kappa)
+    }
+
+    /// A vertex above the first of two edges meeting at v1 (closest point inside it) is
+    /// closest to v1 on the second: that row is implied by the first and left out, and only
+    /// then; a row at the far end of the second edge (no other edge there) never is.
+    #[test]
+    fn an_endpoint_row_is_implied_by_the_interior_row_of_the_other_edge() {
+        use crate::scene::mesh::{Body, BodyKind};
+        // body 0: v0 (0, 0), v1 (1, 0), v2 (2, 0.3); body 1: v3 (0.8, 0.1), v4 (0.8, 0.6)
+        let mesh = Mesh {
+            dim: 2,
+            x_ref: vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.3, 0.8, 0.1, 0.8, 0.6],
+            fixed: vec![false; 5],
+            edges: vec![[0, 1], [1, 2], [3, 4]],
+            edge_body: vec![0, 0, 1],
+            bodies: vec![
+                Body {
+                    name: "floor".into(),
+                    kind: BodyKind::Curve,
+                    h: 1.0,
+                    vertices: vec![0, 1, 2],
+                    edges: vec![0, 1],
+                    ..Default::default()
+                },
+                Body {
+                    name: "post".into(),
+                    kind: BodyKind::Curve,
+                    h: 0.5,
+                    vertices: vec![3, 4],
+                    edges: vec![2],
+                    ..Default::default()
+                },
+            ],
+            ..Default::default()
+        };
+        let x = mesh.x_ref.clone();
+        let mut vertex_edges = vec![Vec::new(); 5];
+        for (k, e) in mesh.edges.iter().enumerate() {
+            vertex_edges[e[0]].push(k);
+            vertex_edges[e[1]].push(k);
+        }
+        let on_first = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        let on_second = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
+        assert!(on_first.weight[0] > 0.1 && on_first.weight[1] > 0.1);
+        assert_eq!(
+            on_second.weight[0], 1.0,
+            "closest point of the second edge: v1"
+        );
+        let interior: PairSet = [on_first.pair].into_iter().collect();
+        assert!(endpoint_row_implied(
+            &mesh,
+            &on_second,
+            &interior,
+            &vertex_edges
+        ));
+        assert!(!endpoint_row_implied(
+            &mesh,
+            &on_first,
+            &interior,
+            &vertex_edges
+        ));
+        assert!(!endpoint_row_implied(
+            &mesh,
+            &on_second,
+            &PairSet::default(),
+            &vertex_edges
+        ));
+        // a vertex beyond the far end v2: closest point v2 on the second edge, no other edge
+        let mut far = x.clone();
+        far[6] = 2.5;
+        far[7] = 0.5;
+        let at_v2 = pair_rows(&mesh, &far, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
+        assert_eq!(at_v2.weight[1], 1.0);
+        let interior: PairSet = [ContactPair::PointEdge { x: 3, a: 0 }]
+            .into_iter()
+            .collect();
+        assert!(!endpoint_row_implied(
+            &mesh,
+            &at_v2,
+            &interior,
+            &vertex_edges
+        ));
+    }
+
+    /// Leaving the implied endpoint rows out keeps every iterate admissible and J monotone
+    /// (checked in `sqp_run`) and ends at the same energy as with every row, to the margin.
+    #[test]
+    fn dropping_implied_endpoint_rows_stays_admissible_and_reaches_the_same_energy() {
+        let (keep, _, _) = sqp_run(SqpSettings::default());
+        let (drop, _, _) = sqp_run(SqpSettings {
+            drop_endpoint_rows: true,
+            ..SqpSettings::default()
+        });
+        let (jk, jd) = (keep.last().unwrap().energy, drop.last().unwrap().energy);
+        assert!((jk - jd).abs() <= 1e-6 * jk.abs(), "J {jd} against {jk}");
+        assert!(drop.iter().filter(|r| r.step == "sqp").count() >= 1);
+        // rows were left out: the path is another one
+        let path = |r: &[IterationRecord]| r.iter().map(|r| r.energy).collect::<Vec<f64>>();
+        assert_ne!(path(&keep), path(&drop));
     }
 
     #[test]
