@@ -129,8 +129,8 @@ pub struct SqpSettings {
     /// `γ`: the model gets `γ·max diag(H)·∇d_k∇d_kᵀ` for each pair with a positive multiplier
     /// at the last step (0: none).
     pub normal_stiffness: f64,
-    /// 2D: leave out of the QP the rows implied by another row of the same vertex
-    /// ([`endpoint_row_implied`]; `--sqp-drop-endpoint-rows`).
+    /// Leave out of the QP the rows implied by another row of the same vertex or edge
+    /// ([`implied_row`]; `--sqp-drop-endpoint-rows`).
     pub drop_endpoint_rows: bool,
 }
 
@@ -498,36 +498,115 @@ pub(crate) fn normal_triplets(
     trip
 }
 
+/// Which elements each vertex belongs to, for [`implied_row`].
+struct Adjacency {
+    vertex_edges: Vec<Vec<usize>>,
+    vertex_faces: Vec<Vec<usize>>,
+}
+
+impl Adjacency {
+    fn new(mesh: &Mesh) -> Adjacency {
+        let nv = mesh.x_ref.len() / mesh.dim;
+        let mut vertex_edges = vec![Vec::new(); nv];
+        for (k, e) in mesh.edges.iter().enumerate() {
+            vertex_edges[e[0]].push(k);
+            vertex_edges[e[1]].push(k);
+        }
+        let mut vertex_faces = vec![Vec::new(); nv];
+        for (k, f) in mesh.faces.iter().enumerate() {
+            for &v in f {
+                vertex_faces[v].push(k);
+            }
+        }
+        Adjacency {
+            vertex_edges,
+            vertex_faces,
+        }
+    }
+}
+
+/// Whether a row's closest points are inside both of its elements (every weight positive):
+/// the rows that can imply others in [`implied_row`].
+fn interior_row(r: &PairRows) -> bool {
+    r.weight[..r.len].iter().all(|&w| w > 1e-12)
+}
+
+/// A row whose closest point on one of its elements is on that element's boundary (a vertex of
+/// an edge; an edge or a vertex of a face), where the same other side has an interior row
+/// ([`interior_row`], in `interior`) against another element that contains that boundary
+/// feature. In the true geometry the first distance is then at least the second (the feature
+/// lies on the other element), so the row is implied; linearized, it is the distance to a
+/// point or a segment, a convex function whose linearization cuts tangential motion towards
+/// the feature (docs/method.md, "Endpoint rows implied by another row").
+///
+/// - 2D, vertex `x` and edge `a` with its closest point at the endpoint `v`: implied by
+///   `x` against another edge at `v`.
+/// - 3D, vertex `x` and face `t` with its closest point on an edge or vertex `F` of `t`:
+///   implied by `x` against another face containing `F`.
+/// - 3D, edges `a`, `b` with the closest point of `a` at its endpoint `u` (or of `b` at `w`):
+///   implied by another edge at `u` against `b` (or `a` against another edge at `w`).
+fn implied_row(mesh: &Mesh, r: &PairRows, interior: &PairSet, adj: &Adjacency) -> bool {
+    const ZERO: f64 = 1e-12;
+    match r.pair {
+        ContactPair::PointEdge { x, a } => {
+            let e = mesh.edges[a];
+            let v = if r.weight[1] <= ZERO {
+                e[0]
+            } else if r.weight[0] <= ZERO {
+                e[1]
+            } else {
+                return false;
+            };
+            adj.vertex_edges[v]
+                .iter()
+                .any(|&b| b != a && interior.contains(&ContactPair::PointEdge { x, a: b }))
+        }
+        ContactPair::PointTriangle { x, t } => {
+            let f = mesh.faces[t];
+            let feature: Vec<usize> = (0..3)
+                .filter(|&i| r.weight[i] > ZERO)
+                .map(|i| f[i])
+                .collect();
+            if feature.len() == 3 || feature.is_empty() {
+                return false;
+            }
+            adj.vertex_faces[feature[0]].iter().any(|&u| {
+                u != t
+                    && feature.iter().all(|v| mesh.faces[u].contains(v))
+                    && interior.contains(&ContactPair::PointTriangle { x, t: u })
+            })
+        }
+        ContactPair::EdgeEdge { a, b } => {
+            // weights (1−s)(1−t), (1−s)t, s(1−t), st
+            let w = &r.weight;
+            let (s0, s1) = (w[2] + w[3] <= ZERO, w[0] + w[1] <= ZERO);
+            let (t0, t1) = (w[1] + w[3] <= ZERO, w[0] + w[2] <= ZERO);
+            let pair = |p: usize, q: usize| ContactPair::EdgeEdge {
+                a: p.min(q),
+                b: p.max(q),
+            };
+            let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
+            let by_a_end = |u: usize| {
+                adj.vertex_edges[u]
+                    .iter()
+                    .any(|&c| c != a && c != b && interior.contains(&pair(c, b)))
+            };
+            let by_b_end = |u: usize| {
+                adj.vertex_edges[u]
+                    .iter()
+                    .any(|&c| c != a && c != b && interior.contains(&pair(a, c)))
+            };
+            (s0 && by_a_end(ea[0]))
+                || (s1 && by_a_end(ea[1]))
+                || (t0 && by_b_end(eb[0]))
+                || (t1 && by_b_end(eb[1]))
+        }
+    }
+}
+
 /// One SQP step from the admissible `x` (J(x) = `jx`): the QP on the linearized rows, then the
 /// line search with its correction and checks (module documentation). `warm`: the last
 /// multiplier of each pair; `shift`: the Newton model's shift, kept from step to step.
-/// A 2D row whose closest point is an endpoint `v` of its edge, where the same vertex has a
-/// row against another edge at `v` with its closest point inside that edge: in the true
-/// geometry the first distance is at least the second (`v` lies on the other edge), so the
-/// row is implied; linearized, it is the distance to the point `v`, a convex function whose
-/// linearization cuts tangential motion towards `v`.
-fn endpoint_row_implied(
-    mesh: &Mesh,
-    r: &PairRows,
-    interior: &PairSet,
-    vertex_edges: &[Vec<usize>],
-) -> bool {
-    let ContactPair::PointEdge { x, a } = r.pair else {
-        return false;
-    };
-    let e = mesh.edges[a];
-    let v = if r.weight[0] >= 1.0 - 1e-12 {
-        e[0]
-    } else if r.weight[1] >= 1.0 - 1e-12 {
-        e[1]
-    } else {
-        return false;
-    };
-    vertex_edges[v]
-        .iter()
-        .any(|&b| b != a && interior.contains(&ContactPair::PointEdge { x, a: b }))
-}
-
 pub(crate) fn sqp_step(
     ctx: &SqpContext,
     x: &[f64],
@@ -556,20 +635,14 @@ pub(crate) fn sqp_step(
         .filter_map(|p| pair_rows(mesh, x, p))
         .collect();
     let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
-    let drop_implied = ctx.sqp.drop_endpoint_rows && dim == 2;
-    let mut vertex_edges: Vec<Vec<usize>> = Vec::new();
-    if drop_implied {
-        vertex_edges = vec![Vec::new(); mesh.x_ref.len() / dim];
-        for (k, e) in mesh.edges.iter().enumerate() {
-            vertex_edges[e[0]].push(k);
-            vertex_edges[e[1]].push(k);
-        }
+    let adjacency = ctx.sqp.drop_endpoint_rows.then(|| Adjacency::new(mesh));
+    if let Some(adj) = &adjacency {
         let interior: PairSet = rows
             .iter()
-            .filter(|r| r.weight[0] > 1e-12 && r.weight[1] > 1e-12)
+            .filter(|r| interior_row(r))
             .map(|r| r.pair)
             .collect();
-        rows.retain(|r| !endpoint_row_implied(mesh, r, &interior, &vertex_edges));
+        rows.retain(|r| !implied_row(mesh, r, &interior, adj));
     }
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
@@ -631,31 +704,31 @@ pub(crate) fn sqp_step(
         if violated.is_empty() {
             break (qp, sol);
         }
-        let violated: Vec<(PairRows, f64)> = if drop_implied {
+        let pick = most_violated_per_point(violated.iter().map(|(r, v)| (r.pair, *v)));
+        let mut picked: Vec<PairRows> = pick.into_iter().map(|i| violated[i].0).collect();
+        if let Some(adj) = &adjacency {
+            // rows implied by the QP's rows or by this round's: left out, and not asked again
             let interior: PairSet = rows
                 .iter()
-                .chain(violated.iter().map(|(r, _)| r))
-                .filter(|r| r.weight[0] > 1e-12 && r.weight[1] > 1e-12)
+                .chain(&picked)
+                .filter(|r| interior_row(r))
                 .map(|r| r.pair)
                 .collect();
-            let (implied, kept): (Vec<_>, Vec<_>) = violated
-                .into_iter()
-                .partition(|(r, _)| endpoint_row_implied(mesh, r, &interior, &vertex_edges));
-            for (r, _) in &implied {
-                carried.insert(r.pair);
-            }
-            if kept.is_empty() {
+            picked.retain(|r| {
+                let implied = implied_row(mesh, r, &interior, adj);
+                if implied {
+                    carried.insert(r.pair);
+                }
+                !implied
+            });
+            if picked.is_empty() {
                 break (qp, sol);
             }
-            kept
-        } else {
-            violated
-        };
-        let pick = most_violated_per_point(violated.iter().map(|(r, v)| (r.pair, *v)));
+        }
         let nold = rows.len();
-        for i in pick {
-            carried.insert(violated[i].0.pair);
-            rows.push(violated[i].0);
+        for r in picked {
+            carried.insert(r.pair);
+            rows.push(r);
         }
         out.lazy_rounds += 1;
         warm_y = inner.warm_start.then(|| {
@@ -893,11 +966,7 @@ mod tests {
             ..Default::default()
         };
         let x = mesh.x_ref.clone();
-        let mut vertex_edges = vec![Vec::new(); 5];
-        for (k, e) in mesh.edges.iter().enumerate() {
-            vertex_edges[e[0]].push(k);
-            vertex_edges[e[1]].push(k);
-        }
+        let adj = Adjacency::new(&mesh);
         let on_first = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
         let on_second = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
         assert!(on_first.weight[0] > 0.1 && on_first.weight[1] > 0.1);
@@ -906,24 +975,9 @@ mod tests {
             "closest point of the second edge: v1"
         );
         let interior: PairSet = [on_first.pair].into_iter().collect();
-        assert!(endpoint_row_implied(
-            &mesh,
-            &on_second,
-            &interior,
-            &vertex_edges
-        ));
-        assert!(!endpoint_row_implied(
-            &mesh,
-            &on_first,
-            &interior,
-            &vertex_edges
-        ));
-        assert!(!endpoint_row_implied(
-            &mesh,
-            &on_second,
-            &PairSet::default(),
-            &vertex_edges
-        ));
+        assert!(implied_row(&mesh, &on_second, &interior, &adj));
+        assert!(!implied_row(&mesh, &on_first, &interior, &adj));
+        assert!(!implied_row(&mesh, &on_second, &PairSet::default(), &adj));
         // a vertex beyond the far end v2: closest point v2 on the second edge, no other edge
         let mut far = x.clone();
         far[6] = 2.5;
@@ -933,12 +987,54 @@ mod tests {
         let interior: PairSet = [ContactPair::PointEdge { x: 3, a: 0 }]
             .into_iter()
             .collect();
-        assert!(!endpoint_row_implied(
-            &mesh,
-            &at_v2,
-            &interior,
-            &vertex_edges
-        ));
+        assert!(!implied_row(&mesh, &at_v2, &interior, &adj));
+    }
+
+    /// 3D edges: an edge crossing above the first of two edges meeting at u1 is closest to u1
+    /// on the second; that edge–edge row is implied by the first edge's (interior) row.
+    #[test]
+    fn an_edge_edge_row_at_an_endpoint_is_implied_by_the_next_edge() {
+        use crate::scene::mesh::{Body, BodyKind};
+        // curve 0: u0 (0,0,0), u1 (1,0,0), u2 (2,0,0.3); curve 1: (0.8,−1,0.1) to (0.8,1,0.1)
+        let mesh = Mesh {
+            dim: 3,
+            x_ref: vec![
+                0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.3, 0.8, -1.0, 0.1, 0.8, 1.0, 0.1,
+            ],
+            fixed: vec![false; 5],
+            edges: vec![[0, 1], [1, 2], [3, 4]],
+            edge_body: vec![0, 0, 1],
+            bodies: vec![
+                Body {
+                    name: "lower".into(),
+                    kind: BodyKind::Curve,
+                    h: 1.0,
+                    vertices: vec![0, 1, 2],
+                    edges: vec![0, 1],
+                    ..Default::default()
+                },
+                Body {
+                    name: "upper".into(),
+                    kind: BodyKind::Curve,
+                    h: 2.0,
+                    vertices: vec![3, 4],
+                    edges: vec![2],
+                    ..Default::default()
+                },
+            ],
+            ..Default::default()
+        };
+        let x = mesh.x_ref.clone();
+        let adj = Adjacency::new(&mesh);
+        let crossing = pair_rows(&mesh, &x, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
+        let at_u1 = pair_rows(&mesh, &x, ContactPair::EdgeEdge { a: 1, b: 2 }).unwrap();
+        assert!(interior_row(&crossing));
+        assert!(!interior_row(&at_u1));
+        assert!((at_u1.distance - 0.1f64.hypot(0.2)).abs() < 1e-12);
+        let interior: PairSet = [crossing.pair].into_iter().collect();
+        assert!(implied_row(&mesh, &at_u1, &interior, &adj));
+        assert!(!implied_row(&mesh, &crossing, &interior, &adj));
+        assert!(!implied_row(&mesh, &at_u1, &PairSet::default(), &adj));
     }
 
     /// Leaving the implied endpoint rows out keeps every iterate admissible and J monotone
