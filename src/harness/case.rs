@@ -48,7 +48,7 @@ pub struct CaseSettings {
     /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0; used by `outer_method`
     /// sqp).
     pub sqp_normal_stiffness: f64,
-    /// SQP, 2D: leave out the rows implied by another row of the same vertex.
+    /// SQP: leave out the rows implied by another row of the same vertex or edge.
     pub sqp_drop_endpoint_rows: bool,
 }
 

@@ -104,10 +104,11 @@ pub struct RunArgs {
     /// positive multiplier at the last step (0: none). docs/method.md, "The SQP outer method".
     #[arg(long, default_value_t = 0.0, value_parser = parse_normal_stiffness)]
     pub sqp_normal_stiffness: f64,
-    /// With --outer-method sqp, 2D: leave out of the QP a vertex's row whose closest point is
-    /// an endpoint of its edge when the vertex's row against the other edge at that endpoint
-    /// has its closest point inside that edge (implied in the true geometry; linearized, it
-    /// cuts the sliding). docs/method.md, "The SQP outer method".
+    /// With --outer-method sqp: leave out of the QP a row whose closest point is on the
+    /// boundary of one of its elements (an edge's endpoint; a face's edge or vertex) when the
+    /// same vertex or edge has an interior row against another element containing that point
+    /// (implied in the true geometry; linearized, it cuts the sliding). docs/method.md, "Rows
+    /// implied by another row".
     #[arg(long)]
     pub sqp_drop_endpoint_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,

@@ -198,7 +198,7 @@ pub struct Common {
     /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0, default 0; with
     /// `outer_method = "sqp"` only).
     pub sqp_normal_stiffness: Option<f64>,
-    /// SQP, 2D: leave out the rows implied by another row of the same vertex (default false;
+    /// SQP: leave out the rows implied by another row of the same vertex or edge (default false;
     /// with `outer_method = "sqp"` only).
     pub sqp_drop_endpoint_rows: Option<bool>,
     /// Reference run for the error columns.

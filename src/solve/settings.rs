@@ -133,7 +133,7 @@ pub struct RunSettings {
     /// SQP: `γ` of the active pairs' normal stiffness (`--sqp-normal-stiffness`; finite,
     /// ≥ 0).
     pub sqp_normal_stiffness: f64,
-    /// SQP, 2D: leave out the rows implied by another row of the same vertex
+    /// SQP: leave out the rows implied by another row of the same vertex or edge
     /// (`--sqp-drop-endpoint-rows`).
     pub sqp_drop_endpoint_rows: bool,
 }

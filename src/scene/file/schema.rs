@@ -44,7 +44,7 @@ pub struct SolverSpec {
     /// SQP: `γ` of the active pairs' normal stiffness (finite, ≥ 0; used with
     /// `outer_method = "sqp"`).
     pub sqp_normal_stiffness: Option<f64>,
-    /// SQP, 2D: leave out the rows implied by another row of the same vertex (used with
+    /// SQP: leave out the rows implied by another row of the same vertex or edge (used with
     /// `outer_method = "sqp"`).
     pub sqp_drop_endpoint_rows: Option<bool>,
 }
