@@ -649,44 +649,28 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             "{name}"
         );
     }
-    // the built-in scenes, from the command line
-    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args([
-            "run",
-            "ring",
-            "--n",
-            "12",
-            "--quiet",
-            "--sqp-curvature",
-            "full",
-            "--out",
-        ])
-        .arg(dir.join("refused_ring"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("--sqp-curvature full set with the pantz outer method"),
-        "{err}"
-    );
-    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args([
-            "run",
-            "ring",
-            "--n",
-            "12",
-            "--quiet",
-            "--sqp-drop-endpoint-rows",
-            "--out",
-        ])
-        .arg(dir.join("refused_ring_drop"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("--sqp-drop-endpoint-rows set with the pantz outer method"),
-        "{err}"
-    );
+    // the built-in scenes, from the command line: each SQP setting refused with pantz
+    for (flags, out, needle) in [
+        (
+            &["--sqp-curvature", "full"][..],
+            "refused_ring",
+            "--sqp-curvature full set with the pantz outer method",
+        ),
+        (
+            &["--sqp-drop-endpoint-rows"][..],
+            "refused_ring_drop",
+            "--sqp-drop-endpoint-rows set with the pantz outer method",
+        ),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+            .args(["run", "ring", "--n", "12", "--quiet"])
+            .args(flags)
+            .arg("--out")
+            .arg(dir.join(out))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{err}");
+    }
 }

@@ -932,39 +932,39 @@ mod tests {
         (records, res.status, res.certificate.kappa)
     }
 
+    /// Two curves of `dim`-dimensional points `x_ref`: `lower` through vertices 0, 1, 2 (edges
+    /// 0 and 1, meeting at vertex 1) and `upper` through 3, 4 (edge 2).
+    fn two_curves(dim: usize, x_ref: Vec<f64>) -> Mesh {
+        use crate::scene::mesh::{Body, BodyKind};
+        let curve = |name: &str, vertices: Vec<usize>, edges: Vec<usize>| Body {
+            name: name.into(),
+            kind: BodyKind::Curve,
+            h: 1.0,
+            vertices,
+            edges,
+            ..Default::default()
+        };
+        Mesh {
+            dim,
+            x_ref,
+            fixed: vec![false; 5],
+            edges: vec![[0, 1], [1, 2], [3, 4]],
+            edge_body: vec![0, 0, 1],
+            bodies: vec![
+                curve("lower", vec![0, 1, 2], vec![0, 1]),
+                curve("upper", vec![3, 4], vec![2]),
+            ],
+            ..Default::default()
+        }
+    }
+
     /// A vertex above the first of two edges meeting at v1 (closest point inside it) is
     /// closest to v1 on the second: that row is implied by the first and left out, and only
     /// then; a row at the far end of the second edge (no other edge there) never is.
     #[test]
     fn an_endpoint_row_is_implied_by_the_interior_row_of_the_other_edge() {
-        use crate::scene::mesh::{Body, BodyKind};
-        // body 0: v0 (0, 0), v1 (1, 0), v2 (2, 0.3); body 1: v3 (0.8, 0.1), v4 (0.8, 0.6)
-        let mesh = Mesh {
-            dim: 2,
-            x_ref: vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.3, 0.8, 0.1, 0.8, 0.6],
-            fixed: vec![false; 5],
-            edges: vec![[0, 1], [1, 2], [3, 4]],
-            edge_body: vec![0, 0, 1],
-            bodies: vec![
-                Body {
-                    name: "floor".into(),
-                    kind: BodyKind::Curve,
-                    h: 1.0,
-                    vertices: vec![0, 1, 2],
-                    edges: vec![0, 1],
-                    ..Default::default()
-                },
-                Body {
-                    name: "post".into(),
-                    kind: BodyKind::Curve,
-                    h: 0.5,
-                    vertices: vec![3, 4],
-                    edges: vec![2],
-                    ..Default::default()
-                },
-            ],
-            ..Default::default()
-        };
+        // lower: v0 (0, 0), v1 (1, 0), v2 (2, 0.3); upper: v3 (0.8, 0.1), v4 (0.8, 0.6)
+        let mesh = two_curves(2, vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.3, 0.8, 0.1, 0.8, 0.6]);
         let x = mesh.x_ref.clone();
         let adj = Adjacency::new(&mesh);
         let on_first = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
@@ -994,36 +994,13 @@ mod tests {
     /// on the second; that edge–edge row is implied by the first edge's (interior) row.
     #[test]
     fn an_edge_edge_row_at_an_endpoint_is_implied_by_the_next_edge() {
-        use crate::scene::mesh::{Body, BodyKind};
-        // curve 0: u0 (0,0,0), u1 (1,0,0), u2 (2,0,0.3); curve 1: (0.8,−1,0.1) to (0.8,1,0.1)
-        let mesh = Mesh {
-            dim: 3,
-            x_ref: vec![
+        // lower: u0 (0,0,0), u1 (1,0,0), u2 (2,0,0.3); upper: (0.8,−1,0.1) to (0.8,1,0.1)
+        let mesh = two_curves(
+            3,
+            vec![
                 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.3, 0.8, -1.0, 0.1, 0.8, 1.0, 0.1,
             ],
-            fixed: vec![false; 5],
-            edges: vec![[0, 1], [1, 2], [3, 4]],
-            edge_body: vec![0, 0, 1],
-            bodies: vec![
-                Body {
-                    name: "lower".into(),
-                    kind: BodyKind::Curve,
-                    h: 1.0,
-                    vertices: vec![0, 1, 2],
-                    edges: vec![0, 1],
-                    ..Default::default()
-                },
-                Body {
-                    name: "upper".into(),
-                    kind: BodyKind::Curve,
-                    h: 2.0,
-                    vertices: vec![3, 4],
-                    edges: vec![2],
-                    ..Default::default()
-                },
-            ],
-            ..Default::default()
-        };
+        );
         let x = mesh.x_ref.clone();
         let adj = Adjacency::new(&mesh);
         let crossing = pair_rows(&mesh, &x, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
