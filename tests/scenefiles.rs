@@ -548,7 +548,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
-                  sqp_normal_stiffness = 0.01\n\n";
+                  sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
         let src = std::fs::read_to_string(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -593,6 +593,9 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 .unwrap()
                 .to_string(),
             s["settings"]["sqp"]["normal_stiffness"].as_f64().unwrap(),
+            s["settings"]["sqp"]["drop_endpoint_rows"]
+                .as_bool()
+                .unwrap(),
         )
     };
     for (name, dynamic) in [
@@ -600,19 +603,34 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         ("dynamic_string.toml", &["--dynamic"][..]),
     ] {
         // the file's values
-        assert_eq!(sqp(&summary(name, dynamic)), ("psd".into(), 0.01), "{name}");
+        assert_eq!(
+            sqp(&summary(name, dynamic)),
+            ("psd".into(), 0.01, true),
+            "{name}"
+        );
         // a flag given on the command line wins, even at its default value; the other key
         // still comes from the file
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
-        assert_eq!(sqp(&summary(name, &flags)), ("off".into(), 0.01), "{name}");
+        assert_eq!(
+            sqp(&summary(name, &flags)),
+            ("off".into(), 0.01, true),
+            "{name}"
+        );
         let flags = [
             dynamic,
-            &["--sqp-curvature", "tangent", "--sqp-normal-stiffness", "0"],
+            &[
+                "--sqp-curvature",
+                "tangent",
+                "--sqp-normal-stiffness",
+                "0",
+                "--sqp-drop-endpoint-rows",
+                "false",
+            ],
         ]
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0),
+            ("tangent".into(), 0.0, false),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -632,15 +650,29 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         refused(
             &pantz,
             &[
-                "--sqp-curvature psd and --sqp-normal-stiffness 0.01",
+                "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
+                 --sqp-drop-endpoint-rows",
                 "pantz",
             ],
         );
         let flags = [&pantz[..], &["--sqp-curvature", "off"]].concat();
-        refused(&flags, &["--sqp-normal-stiffness 0.01", "pantz"]);
+        refused(
+            &flags,
+            &[
+                "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows",
+                "pantz",
+            ],
+        );
         let flags = [
             &pantz[..],
-            &["--sqp-curvature", "off", "--sqp-normal-stiffness", "0"],
+            &[
+                "--sqp-curvature",
+                "off",
+                "--sqp-normal-stiffness",
+                "0",
+                "--sqp-drop-endpoint-rows",
+                "false",
+            ],
         ]
         .concat();
         assert_eq!(

@@ -108,8 +108,10 @@ pub struct RunArgs {
     /// boundary of one of its elements (an edge's endpoint; a face's edge or vertex) when the
     /// same vertex or edge has an interior row against another element containing that point
     /// (implied in the true geometry; linearized, it cuts the sliding). docs/method.md, "Rows
-    /// implied by another row".
-    #[arg(long)]
+    /// implied by another row". `--sqp-drop-endpoint-rows false` turns off a scene file's
+    /// `sqp_drop_endpoint_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
     pub sqp_drop_endpoint_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
