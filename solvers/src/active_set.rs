@@ -5,8 +5,8 @@
 //!
 //! The inner QPs of one sub-problem share their rows, and from one inner step to the next
 //! only a few rows change their activity. An interior point starts each QP away from the
-//! boundary and needs tens of factorizations whatever the warm start (`ip`: about 34 per QP on
-//! the balloons at n = 1600). An active-set method started from the previous QP's active rows
+//! boundary and needs about ten factorizations whatever the warm start (`ip` on the balloons
+//! at n = 1600: 570 iterations for 59 QPs, 34 per inner step). An active-set method started from the previous QP's active rows
 //! needs one factorization when they are still the active rows.
 //!
 //! # Method
@@ -40,9 +40,10 @@
 //! nothing changes: every `z_j ≥ −tol` (those below 0 are set to 0), the primal and dual
 //! residuals of the original QP meet the tolerances of
 //! [`crate::clarabel_backend::meets_tolerances`] and the complementarity gap
-//! `Σ_W z_j |g_j·x − h_j|` meets the interior point's. A working set seen before (a cycle),
-//! `MAX_UPDATES` updates, a failed factorization or a round that does not converge hand the QP
-//! to the interior point with the same warm start; [`ActiveSetBackend::handed_on`] counts them,
+//! `Σ_W z_j |g_j·x − h_j|` meets the interior point's. A working set seen before (a cycle:
+//! also where the rounds do not converge and the update changes nothing), `MAX_UPDATES`
+//! updates or a failed factorization hand the QP to the interior point with the same warm
+//! start; [`ActiveSetBackend::handed_on`] counts them,
 //! and [`QpBackend::fallback_solves`] includes them.
 //!
 //! **Measured** (docs/method.md, "Backends and accuracy presets"): on the balloons it is
@@ -55,7 +56,7 @@
 //! reused when the next QP starts from the same working set.
 use crate::backend::{QpBackend, QpError, QpSettings, QpSolution, QpStatus, WarmStart};
 use crate::clarabel_backend::meets_tolerances;
-use crate::ipm::{IpBackend, Kkt, Split, SymbolicCache};
+use crate::ipm::{p_diagonal, IpBackend, Kkt, Split, SymbolicCache};
 use crate::qp::Qp;
 use std::collections::HashSet;
 use std::time::Instant;
@@ -75,7 +76,6 @@ pub struct ActiveSetBackend {
     ip: IpBackend,
     cache: Option<SymbolicCache>,
     handed_on: usize,
-    factorizations: usize,
 }
 
 impl ActiveSetBackend {
@@ -87,19 +87,12 @@ impl ActiveSetBackend {
             settings,
             cache: None,
             handed_on: 0,
-            factorizations: 0,
         }
     }
 
     /// QPs handed to the interior point since the backend was made.
     pub fn handed_on(&self) -> usize {
         self.handed_on
-    }
-
-    /// Factorizations done by the active-set method (not the interior point's) since the
-    /// backend was made.
-    pub fn factorizations(&self) -> usize {
-        self.factorizations
     }
 
     /// The active-set method alone: `Some` solution when it ends `Solved`, `None` to hand the
@@ -114,14 +107,7 @@ impl ActiveSetBackend {
         let (n, m) = (qp.n(), qp.m());
         let split = Split::new(qp);
         let mi = split.ineq.len();
-        let mut pdiag = vec![0.0; n];
-        for (j, pd) in pdiag.iter_mut().enumerate() {
-            for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
-                if qp.p.rowval[p] == j {
-                    *pd = qp.p.nzval[p];
-                }
-            }
-        }
+        let pdiag = p_diagonal(qp);
         let maxdiag = pdiag.iter().fold(1.0f64, |a, b| a.max(b.abs()));
         let reg = 1e-10 * maxdiag;
         let pen: Vec<f64> = (0..mi)
@@ -169,7 +155,6 @@ impl ActiveSetBackend {
             let d: Vec<f64> = keep.iter().map(|&j| pen[j]).collect();
             let vals_true = k.values(qp, &d, 0.0, 0.0);
             let vals = k.values(qp, &d, reg, reg);
-            self.factorizations += 1;
             if !k.factor(&vals, reg) {
                 return None;
             }
@@ -267,17 +252,8 @@ impl ActiveSetBackend {
             if changed || !held {
                 continue;
             }
-            let mut y = vec![0.0; m];
-            for (&(i, sg), &zj) in split.ineq.iter().zip(&z) {
-                y[i] -= sg * zj;
-            }
-            for (&i, &v) in split.eq.iter().zip(&ye) {
-                y[i] = -v;
-            }
-            let mut px = vec![0.0; n];
-            qp.p.sym_upper_mul_add(1.0, &x, &mut px);
-            let obj = 0.5 * x.iter().zip(&px).map(|(a, b)| a * b).sum::<f64>()
-                + x.iter().zip(&qp.q).map(|(a, b)| a * b).sum::<f64>();
+            let y = split.duals(m, &z, &ye);
+            let obj = qp.objective(&x);
             let gap: f64 = (0..mi)
                 .filter(|&j| in_w[j])
                 .map(|j| z[j] * (gx[j] - split.h[j]).abs())

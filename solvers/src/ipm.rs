@@ -251,6 +251,19 @@ pub(crate) struct Split {
     e_val: Vec<f64>,
 }
 
+/// The diagonal of `P` (0 where it has no entry).
+pub(crate) fn p_diagonal(qp: &Qp) -> Vec<f64> {
+    let mut pdiag = vec![0.0; qp.n()];
+    for (j, pd) in pdiag.iter_mut().enumerate() {
+        for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
+            if qp.p.rowval[p] == j {
+                *pd = qp.p.nzval[p];
+            }
+        }
+    }
+    pdiag
+}
+
 /// `out_j = row_j · x` for a CSR matrix.
 #[inline]
 fn csr_mul(ptr: &[usize], col: &[usize], val: &[f64], x: &[f64], out: &mut [f64]) {
@@ -328,6 +341,20 @@ impl Split {
             e_col,
             e_val,
         }
+    }
+
+    /// The duals of the `m` rows of the QP from the inequality duals `z` and the equality
+    /// duals `ye` (the sign convention of [`QpSolution::y`]): `y_i = z_upper − z_lower`,
+    /// `y_i = −y_E` on equality rows.
+    pub(crate) fn duals(&self, m: usize, z: &[f64], ye: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; m];
+        for (&(i, sg), &zj) in self.ineq.iter().zip(z) {
+            y[i] -= sg * zj;
+        }
+        for (&i, &v) in self.eq.iter().zip(ye) {
+            y[i] = -v;
+        }
+        y
     }
 
     /// The same equality rows and the inequality constraints `keep` only (in that order).
@@ -758,16 +785,7 @@ impl IpBackend {
         // "Constraint reduction").
         let mut kkt: Option<Kkt> = None;
         // the duals of the original rows: y_i = z_upper − z_lower, −y_E on equality rows
-        let map_y = |z: &[f64], ye: &[f64]| {
-            let mut y = vec![0.0; m];
-            for (&(i, sg), &zj) in split.ineq.iter().zip(z) {
-                y[i] -= sg * zj;
-            }
-            for (&i, &v) in split.eq.iter().zip(ye) {
-                y[i] = -v;
-            }
-            y
-        };
+        let map_y = |z: &[f64], ye: &[f64]| split.duals(m, z, ye);
         let maxdiag = (0..n)
             .filter_map(|j| {
                 (qp.p.colptr[j]..qp.p.colptr[j + 1])
@@ -832,14 +850,7 @@ impl IpBackend {
             && row_couplings as f64 >= REDUCE_MIN_COUPLING_SHARE * qp.p.nnz() as f64;
         let (mut gnorm2, mut pmin) = (Vec::new(), Vec::new());
         if reduce {
-            let mut pdiag = vec![0.0; n];
-            for (j, pd) in pdiag.iter_mut().enumerate() {
-                for p in qp.p.colptr[j]..qp.p.colptr[j + 1] {
-                    if qp.p.rowval[p] == j {
-                        *pd = qp.p.nzval[p];
-                    }
-                }
-            }
+            let pdiag = p_diagonal(qp);
             for j in 0..mi {
                 let (cs, vs) = split.g_row(j);
                 gnorm2.push(vs.iter().map(|v| v * v).sum::<f64>());

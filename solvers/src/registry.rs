@@ -22,6 +22,7 @@
 //! | `clarabel`       | 1e-6 | 1e-9    | 1e-11 |
 //! | `clarabel-reuse` | 1e-6 | 1e-9    | 1e-11 |
 //! | `ip`             | 1e-6 | 1e-10   | 1e-11 |
+//! | `active-set`     | 1e-6 | 1e-10   | 1e-11 |
 //! | `osqp`           | 1e-4 | 1e-6    | 1e-8  |
 //! | `uzawa`          | 1e-6 | 1e-8    | 1e-10 |
 //!
@@ -71,6 +72,13 @@ pub struct Backend {
     pub build: fn(QpSettings) -> Box<dyn QpBackend>,
 }
 
+/// The presets of `ip` and of `active-set`, which hands the QPs it does not solve to `ip`.
+const IP_TOLERANCES: PresetTolerances = PresetTolerances {
+    low: 1e-6,
+    default: 1e-10,
+    high: 1e-11,
+};
+
 /// Every backend, in the order of help texts and sweeps.
 pub const BACKENDS: [Backend; 6] = [
     Backend {
@@ -97,11 +105,7 @@ pub const BACKENDS: [Backend; 6] = [
         name: "ip",
         about: "interior point on the condensed system, faer sparse LDLT; a QP it does not solve \
                 goes to Clarabel",
-        tol: PresetTolerances {
-            low: 1e-6,
-            default: 1e-10,
-            high: 1e-11,
-        },
+        tol: IP_TOLERANCES,
         build: |s| {
             Box::new(crate::fallback::Fallback::new(
                 Box::new(crate::ipm::IpBackend::new(s.clone())),
@@ -113,11 +117,7 @@ pub const BACKENDS: [Backend; 6] = [
         name: "active-set",
         about: "primal-dual active set from the warm start's duals; a QP it does not solve goes \
                 to ip, then Clarabel",
-        tol: PresetTolerances {
-            low: 1e-6,
-            default: 1e-10,
-            high: 1e-11,
-        },
+        tol: IP_TOLERANCES,
         build: |s| {
             Box::new(crate::fallback::Fallback::new(
                 Box::new(crate::active_set::ActiveSetBackend::new(s.clone())),

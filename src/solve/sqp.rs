@@ -506,7 +506,7 @@ struct Adjacency {
 
 impl Adjacency {
     fn new(mesh: &Mesh) -> Adjacency {
-        let nv = mesh.x_ref.len() / mesh.dim;
+        let nv = mesh.nv();
         let mut vertex_edges = vec![Vec::new(); nv];
         for (k, e) in mesh.edges.iter().enumerate() {
             vertex_edges[e[0]].push(k);
@@ -537,7 +537,7 @@ fn interior_row(r: &PairRows) -> bool {
 /// feature. In the true geometry the first distance is then at least the second (the feature
 /// lies on the other element), so the row is implied; linearized, it is the distance to a
 /// point or a segment, a convex function whose linearization cuts tangential motion towards
-/// the feature (docs/method.md, "Endpoint rows implied by another row").
+/// the feature (docs/method.md, "Rows implied by another row").
 ///
 /// - 2D, vertex `x` and edge `a` with its closest point at the endpoint `v`: implied by
 ///   `x` against another edge at `v`.
