@@ -548,7 +548,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
-                  sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\n";
+                  sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\
+                  sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
         let src = std::fs::read_to_string(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -596,6 +597,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             s["settings"]["sqp"]["drop_endpoint_rows"]
                 .as_bool()
                 .unwrap(),
+            s["settings"]["sqp"]["extend_rows"].as_bool().unwrap(),
+            s["settings"]["sqp"]["drop_vertex_rows"].as_bool().unwrap(),
         )
     };
     for (name, dynamic) in [
@@ -605,7 +608,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // the file's values
         assert_eq!(
             sqp(&summary(name, dynamic)),
-            ("psd".into(), 0.01, true),
+            ("psd".into(), 0.01, true, true, true),
             "{name}"
         );
         // a flag given on the command line wins, even at its default value; the other key
@@ -613,7 +616,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("off".into(), 0.01, true),
+            ("off".into(), 0.01, true, true, true),
             "{name}"
         );
         let flags = [
@@ -625,12 +628,14 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "0",
                 "--sqp-drop-endpoint-rows",
                 "false",
+                "--sqp-extend-rows",
+                "false",
             ],
         ]
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0, false),
+            ("tangent".into(), 0.0, false, false, true),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -651,7 +656,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &pantz,
             &[
                 "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
-                 --sqp-drop-endpoint-rows",
+                 --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows",
                 "pantz",
             ],
         );
@@ -659,7 +664,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         refused(
             &flags,
             &[
-                "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows",
+                "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows and \
+                 --sqp-extend-rows and --sqp-drop-vertex-rows",
                 "pantz",
             ],
         );
@@ -671,6 +677,10 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "--sqp-normal-stiffness",
                 "0",
                 "--sqp-drop-endpoint-rows",
+                "false",
+                "--sqp-extend-rows",
+                "false",
+                "--sqp-drop-vertex-rows",
                 "false",
             ],
         ]
@@ -692,6 +702,16 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-drop-endpoint-rows"][..],
             "refused_ring_drop",
             "--sqp-drop-endpoint-rows set with the pantz outer method",
+        ),
+        (
+            &["--sqp-extend-rows"][..],
+            "refused_ring_extend",
+            "--sqp-extend-rows set with the pantz outer method",
+        ),
+        (
+            &["--sqp-drop-vertex-rows", "true"][..],
+            "refused_ring_vertex",
+            "--sqp-drop-vertex-rows set with the pantz outer method",
         ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))

@@ -50,6 +50,10 @@ pub struct CaseSettings {
     pub sqp_normal_stiffness: f64,
     /// SQP: leave out the rows implied by another row of the same vertex or edge.
     pub sqp_drop_endpoint_rows: bool,
+    /// SQP: rows against the extended element where the body turns towards the other side.
+    pub sqp_extend_rows: bool,
+    /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body.
+    pub sqp_drop_vertex_rows: bool,
 }
 
 /// A finished case.
@@ -140,6 +144,8 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.curvature = cs.sqp_curvature;
     settings.sqp.normal_stiffness = cs.sqp_normal_stiffness;
     settings.sqp.drop_endpoint_rows = cs.sqp_drop_endpoint_rows;
+    settings.sqp.extend_rows = cs.sqp_extend_rows;
+    settings.sqp.drop_vertex_rows = cs.sqp_drop_vertex_rows;
     settings
 }
 

@@ -178,6 +178,8 @@ fn run_prepared(
         sqp_curvature: rs.sqp_curvature,
         sqp_normal_stiffness: rs.sqp_normal_stiffness,
         sqp_drop_endpoint_rows: rs.sqp_drop_endpoint_rows,
+        sqp_extend_rows: rs.sqp_extend_rows,
+        sqp_drop_vertex_rows: rs.sqp_drop_vertex_rows,
     };
     let qps = rs.qp_settings();
     let out = a

@@ -74,6 +74,8 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_curvature: Default::default(),
         sqp_normal_stiffness: 0.0,
         sqp_drop_endpoint_rows: false,
+        sqp_extend_rows: false,
+        sqp_drop_vertex_rows: false,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -113,6 +113,21 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_drop_endpoint_rows: bool,
+    /// SQP: take a row whose closest point is on an element's boundary against the element
+    /// extended past it (the line through an edge; in 3D the line–line distance of two curve
+    /// edges) where the body turns towards the other side there, so that the row does not cut
+    /// a slide past the boundary (2D and 3D curves; docs/method.md, "Rows against the extended
+    /// element"). `--sqp-extend-rows false` turns off a scene file's `sqp_extend_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_extend_rows: bool,
+    /// SQP, 2D: leave out a vertex's row whose closest point is a vertex of the other body when
+    /// that vertex's row against an edge at the first is in the QP (implied; docs/method.md,
+    /// "Rows implied by another row"). `--sqp-drop-vertex-rows false` turns off a scene file's
+    /// `sqp_drop_vertex_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_drop_vertex_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -361,6 +376,8 @@ fn scene_from_file(
     }
     from_file!("sqp_normal_stiffness", sqp_normal_stiffness);
     from_file!("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows);
+    from_file!("sqp_extend_rows", sqp_extend_rows);
+    from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -390,6 +407,8 @@ impl RunArgs {
             sqp_curvature: Curvature::from_name(&self.sqp_curvature).unwrap_or_default(),
             sqp_normal_stiffness: self.sqp_normal_stiffness,
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
+            sqp_extend_rows: self.sqp_extend_rows,
+            sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
         }
     }
 }
@@ -418,6 +437,12 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_drop_endpoint_rows,
                 String::new(),
             ),
+            ("--sqp-extend-rows", settings.sqp_extend_rows, String::new()),
+            (
+                "--sqp-drop-vertex-rows",
+                settings.sqp_drop_vertex_rows,
+                String::new(),
+            ),
         ]
         .into_iter()
         .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
@@ -425,9 +450,9 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
         if !set.is_empty() {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
-                 --sqp-normal-stiffness, --sqp-drop-endpoint-rows, or sqp_curvature, \
-                 sqp_normal_stiffness and sqp_drop_endpoint_rows in a scene file's [solver]) \
-                 apply to --outer-method sqp only",
+                 --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
+                 --sqp-drop-vertex-rows, or the same keys with underscores in a scene file's \
+                 [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );

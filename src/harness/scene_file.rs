@@ -163,6 +163,12 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_drop_endpoint_rows {
         s.sqp_drop_endpoint_rows = v;
     }
+    if let Some(v) = spec.sqp_extend_rows {
+        s.sqp_extend_rows = v;
+    }
+    if let Some(v) = spec.sqp_drop_vertex_rows {
+        s.sqp_drop_vertex_rows = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }

@@ -201,6 +201,12 @@ pub struct Common {
     /// SQP: leave out the rows implied by another row of the same vertex or edge (default false;
     /// with `outer_method = "sqp"` only).
     pub sqp_drop_endpoint_rows: Option<bool>,
+    /// SQP: rows against the extended element where the body turns towards the other side
+    /// (default false; with `outer_method = "sqp"` only).
+    pub sqp_extend_rows: Option<bool>,
+    /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied by
+    /// that vertex's row (default false; with `outer_method = "sqp"` only).
+    pub sqp_drop_vertex_rows: Option<bool>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -401,6 +407,8 @@ struct BlockSettings {
     sqp_curvature: Curvature,
     sqp_normal_stiffness: f64,
     sqp_drop_endpoint_rows: bool,
+    sqp_extend_rows: bool,
+    sqp_drop_vertex_rows: bool,
     reference: Option<ReferenceSpec>,
 }
 
@@ -467,6 +475,14 @@ impl BlockSettings {
             .sqp_drop_endpoint_rows
             .or(defaults.sqp_drop_endpoint_rows)
             .unwrap_or(false);
+        let sqp_extend_rows = c
+            .sqp_extend_rows
+            .or(defaults.sqp_extend_rows)
+            .unwrap_or(false);
+        let sqp_drop_vertex_rows = c
+            .sqp_drop_vertex_rows
+            .or(defaults.sqp_drop_vertex_rows)
+            .unwrap_or(false);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -502,6 +518,8 @@ impl BlockSettings {
                 ("sqp_curvature", sqp_curvature != Curvature::default()),
                 ("sqp_normal_stiffness", sqp_normal_stiffness != 0.0),
                 ("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows),
+                ("sqp_extend_rows", sqp_extend_rows),
+                ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
@@ -509,8 +527,8 @@ impl BlockSettings {
             if !set.is_empty() {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
-                     sqp_normal_stiffness and sqp_drop_endpoint_rows apply to outer_method = \
-                     \"sqp\" only",
+                     sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows and \
+                     sqp_drop_vertex_rows apply to outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
@@ -557,6 +575,8 @@ impl BlockSettings {
             sqp_curvature,
             sqp_normal_stiffness,
             sqp_drop_endpoint_rows,
+            sqp_extend_rows,
+            sqp_drop_vertex_rows,
             reference,
         })
     }
@@ -587,6 +607,8 @@ impl BlockSettings {
             sqp_curvature: self.sqp_curvature,
             sqp_normal_stiffness: self.sqp_normal_stiffness,
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
+            sqp_extend_rows: self.sqp_extend_rows,
+            sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -608,13 +630,13 @@ impl BlockSettings {
 /// The key of a run: everything that defines it. The group key, the time stepping (dynamic),
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
-/// than `off`, an SQP normal stiffness other than 0 and the SQP's dropped endpoint rows only
-/// when set, so that the keys of
+/// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
+/// endpoint rows, extended rows, dropped vertex rows) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -652,6 +674,16 @@ fn run_key(spec: &RunSpec) -> String {
         },
         if s.sqp_drop_endpoint_rows {
             "|drop-endpoint-rows"
+        } else {
+            ""
+        },
+        if s.sqp_extend_rows {
+            "|extend-rows"
+        } else {
+            ""
+        },
+        if s.sqp_drop_vertex_rows {
+            "|drop-vertex-rows"
         } else {
             ""
         }
@@ -901,6 +933,8 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_curvature: Default::default(),
         sqp_normal_stiffness: 0.0,
         sqp_drop_endpoint_rows: false,
+        sqp_extend_rows: false,
+        sqp_drop_vertex_rows: false,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,

@@ -136,6 +136,11 @@ pub struct RunSettings {
     /// SQP: leave out the rows implied by another row of the same vertex or edge
     /// (`--sqp-drop-endpoint-rows`).
     pub sqp_drop_endpoint_rows: bool,
+    /// SQP: rows against the extended element (`--sqp-extend-rows`).
+    pub sqp_extend_rows: bool,
+    /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body
+    /// (`--sqp-drop-vertex-rows`).
+    pub sqp_drop_vertex_rows: bool,
 }
 
 impl Default for RunSettings {
@@ -158,6 +163,8 @@ impl Default for RunSettings {
             sqp_curvature: outer.sqp.curvature,
             sqp_normal_stiffness: outer.sqp.normal_stiffness,
             sqp_drop_endpoint_rows: outer.sqp.drop_endpoint_rows,
+            sqp_extend_rows: outer.sqp.extend_rows,
+            sqp_drop_vertex_rows: outer.sqp.drop_vertex_rows,
         }
     }
 }
@@ -291,6 +298,8 @@ impl RunSettings {
         settings.sqp.curvature = self.sqp_curvature;
         settings.sqp.normal_stiffness = self.sqp_normal_stiffness;
         settings.sqp.drop_endpoint_rows = self.sqp_drop_endpoint_rows;
+        settings.sqp.extend_rows = self.sqp_extend_rows;
+        settings.sqp.drop_vertex_rows = self.sqp_drop_vertex_rows;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

@@ -54,6 +54,7 @@
 //! Every accepted iterate is admissible (checked exactly) and J decreases.
 
 use crate::contact::continuous::first_contact;
+use crate::contact::distance::{edge_edge_distance, point_edge_distance};
 use crate::contact::hessian::pair_hessian;
 use crate::contact::motion::AnyMotionSearch;
 use crate::contact::{
@@ -66,6 +67,7 @@ use crate::solve::outer::most_violated_per_point;
 use crate::solve::qp_units::solve_in_units;
 use crate::solve::subproblem::{build_qp_with, DofMap, InnerSettings, ModelShift};
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpSolution, QpStatus, WarmStart};
+use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -132,6 +134,14 @@ pub struct SqpSettings {
     /// Leave out of the QP the rows implied by another row of the same vertex or edge
     /// ([`implied_row`]; `--sqp-drop-endpoint-rows`).
     pub drop_endpoint_rows: bool,
+    /// Take a row whose closest point is on an element's boundary against the element extended
+    /// past it, where the body turns towards the other side there ([`extended_row`]; 2D and 3D
+    /// curves; `--sqp-extend-rows`).
+    pub extend_rows: bool,
+    /// 2D: leave out a vertex's row whose closest point is a vertex of the other body, when that
+    /// vertex's row against an edge at the first is in the QP ([`implied_row`];
+    /// `--sqp-drop-vertex-rows`).
+    pub drop_vertex_rows: bool,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -202,6 +212,8 @@ impl Default for SqpSettings {
             curvature: Curvature::default(),
             normal_stiffness: 0.0,
             drop_endpoint_rows: false,
+            extend_rows: false,
+            drop_vertex_rows: false,
         }
     }
 }
@@ -502,6 +514,8 @@ pub(crate) fn normal_triplets(
 struct Adjacency {
     vertex_edges: Vec<Vec<usize>>,
     vertex_faces: Vec<Vec<usize>>,
+    /// 2D: the solid triangles at each vertex (a solid's boundary edge has one).
+    vertex_triangles: Vec<Vec<usize>>,
 }
 
 impl Adjacency {
@@ -518,9 +532,18 @@ impl Adjacency {
                 vertex_faces[v].push(k);
             }
         }
+        let mut vertex_triangles = vec![Vec::new(); nv];
+        if mesh.dim == 2 {
+            for (k, t) in mesh.triangles.iter().enumerate() {
+                for &v in t {
+                    vertex_triangles[v].push(k);
+                }
+            }
+        }
         Adjacency {
             vertex_edges,
             vertex_faces,
+            vertex_triangles,
         }
     }
 }
@@ -531,21 +554,41 @@ fn interior_row(r: &PairRows) -> bool {
     r.weight[..r.len].iter().all(|&w| w > 1e-12)
 }
 
+/// Whether a row is taken against an extended element ([`extended_row`]): its closest point
+/// lies past the element's boundary, so one of its weights is negative (the pairs' own rows
+/// have barycentric weights in `[0, 1]`).
+fn is_extended(r: &PairRows) -> bool {
+    r.weight[..r.len].iter().any(|&w| w < -1e-12)
+}
+
 /// A row whose closest point on one of its elements is on that element's boundary (a vertex of
-/// an edge; an edge or a vertex of a face), where the same other side has an interior row
-/// ([`interior_row`], in `interior`) against another element that contains that boundary
-/// feature. In the true geometry the first distance is then at least the second (the feature
-/// lies on the other element), so the row is implied; linearized, it is the distance to a
-/// point or a segment, a convex function whose linearization cuts tangential motion towards
-/// the feature (docs/method.md, "Rows implied by another row").
+/// an edge; an edge or a vertex of a face) and is implied by a row in `trusted` (the QP's
+/// interior rows, [`interior_row`], and with `--sqp-extend-rows` its extended rows): in the
+/// true geometry the first distance is at least the second, so the row is implied;
+/// linearized, it is the distance to a point or a segment, a convex function whose
+/// linearization cuts tangential motion towards the feature (docs/method.md, "Rows implied by
+/// another row").
 ///
+/// With `endpoint` (`--sqp-drop-endpoint-rows`), the same other side against another element
+/// that contains that boundary feature (the feature lies on the other element):
 /// - 2D, vertex `x` and edge `a` with its closest point at the endpoint `v`: implied by
 ///   `x` against another edge at `v`.
 /// - 3D, vertex `x` and face `t` with its closest point on an edge or vertex `F` of `t`:
 ///   implied by `x` against another face containing `F`.
 /// - 3D, edges `a`, `b` with the closest point of `a` at its endpoint `u` (or of `b` at `w`):
 ///   implied by another edge at `u` against `b` (or `a` against another edge at `w`).
-fn implied_row(mesh: &Mesh, r: &PairRows, interior: &PairSet, adj: &Adjacency) -> bool {
+///
+/// With `vertex` (`--sqp-drop-vertex-rows`, 2D): vertex `x` and edge `a` with its closest point
+/// at the endpoint `v`, a vertex of the other body: the distance is `|x − v|`, at least the
+/// distance from `v` to any edge at `x`, so it is implied by `v` against an edge at `x`.
+fn implied_row(
+    mesh: &Mesh,
+    r: &PairRows,
+    trusted: &PairSet,
+    endpoint: bool,
+    vertex: bool,
+    adj: &Adjacency,
+) -> bool {
     const ZERO: f64 = 1e-12;
     match r.pair {
         ContactPair::PointEdge { x, a } => {
@@ -557,10 +600,16 @@ fn implied_row(mesh: &Mesh, r: &PairRows, interior: &PairSet, adj: &Adjacency) -
             } else {
                 return false;
             };
-            adj.vertex_edges[v]
-                .iter()
-                .any(|&b| b != a && interior.contains(&ContactPair::PointEdge { x, a: b }))
+            (endpoint
+                && adj.vertex_edges[v]
+                    .iter()
+                    .any(|&b| b != a && trusted.contains(&ContactPair::PointEdge { x, a: b })))
+                || (vertex
+                    && adj.vertex_edges[x]
+                        .iter()
+                        .any(|&b| trusted.contains(&ContactPair::PointEdge { x: v, a: b })))
         }
+        _ if !endpoint => false,
         ContactPair::PointTriangle { x, t } => {
             let f = mesh.faces[t];
             let feature: Vec<usize> = (0..3)
@@ -573,7 +622,7 @@ fn implied_row(mesh: &Mesh, r: &PairRows, interior: &PairSet, adj: &Adjacency) -
             adj.vertex_faces[feature[0]].iter().any(|&u| {
                 u != t
                     && feature.iter().all(|v| mesh.faces[u].contains(v))
-                    && interior.contains(&ContactPair::PointTriangle { x, t: u })
+                    && trusted.contains(&ContactPair::PointTriangle { x, t: u })
             })
         }
         ContactPair::EdgeEdge { a, b } => {
@@ -589,17 +638,209 @@ fn implied_row(mesh: &Mesh, r: &PairRows, interior: &PairSet, adj: &Adjacency) -
             let by_a_end = |u: usize| {
                 adj.vertex_edges[u]
                     .iter()
-                    .any(|&c| c != a && c != b && interior.contains(&pair(c, b)))
+                    .any(|&c| c != a && c != b && trusted.contains(&pair(c, b)))
             };
             let by_b_end = |u: usize| {
                 adj.vertex_edges[u]
                     .iter()
-                    .any(|&c| c != a && c != b && interior.contains(&pair(a, c)))
+                    .any(|&c| c != a && c != b && trusted.contains(&pair(a, c)))
             };
             (s0 && by_a_end(ea[0]))
                 || (s1 && by_a_end(ea[1]))
                 || (t0 && by_b_end(eb[0]))
                 || (t1 && by_b_end(eb[1]))
+        }
+    }
+}
+
+/// The row of a pair whose closest point on an element is on that element's boundary, taken
+/// against the element extended past that boundary: in 2D the line through the edge, between
+/// two edges of 3D curves the line–line distance (surfaces and faces keep their rows: `None`).
+/// Only where the body turns towards the other side there: the body's own chain of edges past
+/// the boundary lies on the other side's side of the extension (or in it) as far as the
+/// extension's closest point, and a 2D solid's edge is faced from outside. The distance to the
+/// extension is at most the distance to the element, so the row asks at least as much as the
+/// pair's own; where the body turns towards the other side the extension runs inside the body,
+/// so it does not bind where the true distance is free. Linearized, it is a plane that a slide
+/// past the boundary does not cut, where the distance to the boundary feature (a point) is a
+/// convex function whose linearization cuts every tangential motion towards it
+/// (docs/method.md, "Rows against the extended element"). `None`: the pair keeps its row.
+fn extended_row(mesh: &Mesh, x: &[f64], r: &PairRows, adj: &Adjacency) -> Option<PairRows> {
+    // round-off allowance of the side test, relative to the edge (a straight chain is in the
+    // extension)
+    const TURN: f64 = 1e-9;
+    // the longest chain walked past the boundary (edges): a farther extension is not taken
+    const CHAIN: usize = 4;
+    let p3v = |v: usize| -> Vector3<f64> {
+        if mesh.dim == 2 {
+            Vector3::new(x[2 * v], x[2 * v + 1], 0.0)
+        } else {
+            Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])
+        }
+    };
+    // From the end `w` of `edge`, along the extension `dir` for a length `reach`: the body's
+    // own chain of edges beyond `w` (one edge at each vertex: a curve or a solid's boundary),
+    // every vertex on the other side's side of the extension or in it (`sign·(u − w)·n ≤ 0`
+    // up to round-off), until the chain has passed the extension's point. Returns the least
+    // distance `dist(e)` of the other side to the chain's edges (`None`: the chain fails).
+    let chain_turns_towards = |edge: usize,
+                               w: usize,
+                               dir: &Vector3<f64>,
+                               reach: f64,
+                               n: &Vector3<f64>,
+                               sign: f64,
+                               dist: &dyn Fn(usize) -> f64|
+     -> Option<f64> {
+        let pw = p3v(w);
+        let (mut prev, mut cur) = (edge, w);
+        let mut least = f64::INFINITY;
+        for _ in 0..CHAIN {
+            let mut next = adj.vertex_edges[cur].iter().filter(|&&e| e != prev);
+            let (Some(&e), None) = (next.next(), next.next()) else {
+                return None;
+            };
+            let ee = mesh.edges[e];
+            let u = if ee[0] == cur { ee[1] } else { ee[0] };
+            let du = p3v(u) - pw;
+            if sign * du.dot(n) > TURN * du.norm() {
+                return None;
+            }
+            least = least.min(dist(e));
+            let along = du.dot(dir);
+            if along >= reach {
+                return Some(least);
+            }
+            if along <= 0.0 {
+                return None;
+            }
+            (prev, cur) = (e, u);
+        }
+        None
+    };
+    // The extension runs inside the body only if the other side is outside the chain: its
+    // distance to the extension at least its distance to the chain (the perpendicular to the
+    // extension crosses the chain), up to round-off.
+    let outside = |d_ext: f64, least: f64| d_ext >= least * (1.0 - 1e-9);
+    match r.pair {
+        ContactPair::PointEdge { x: p, a } => {
+            let e = mesh.edges[a];
+            let (p0, p1, px) = (p3v(e[0]), p3v(e[1]), p3v(p));
+            let d = p1 - p0;
+            let l2 = d.norm_squared();
+            if l2 <= 0.0 {
+                return None;
+            }
+            let t = (px - p0).dot(&d) / l2;
+            let len = l2.sqrt();
+            let (w, dir, reach) = if t < 0.0 {
+                (e[0], -d / len, -t * len)
+            } else if t > 1.0 {
+                (e[1], d / len, (t - 1.0) * len)
+            } else {
+                return None;
+            };
+            let foot = p0 + d * t;
+            let dist_line = (foot - px).norm();
+            if dist_line.is_nan() || dist_line <= 0.0 {
+                return None;
+            }
+            let n = (foot - px) / dist_line;
+            // a solid's edge: p must face it from outside (the solid beyond the line)
+            for &k in &adj.vertex_triangles[e[0]] {
+                let tri = mesh.triangles[k];
+                if tri.contains(&e[1]) {
+                    let third = tri.iter().copied().find(|&v| v != e[0] && v != e[1]);
+                    if let Some(v3) = third {
+                        if (p3v(v3) - p0).dot(&n) <= 0.0 {
+                            return None;
+                        }
+                    }
+                }
+            }
+            // the other edges at w have their far ends on p's side (−n) or on the line
+            let dist = |e: usize| {
+                let ee = mesh.edges[e];
+                let (q0, q1) = (p3v(ee[0]), p3v(ee[1]));
+                point_edge_distance(&px.xy(), &q0.xy(), &q1.xy()).distance
+            };
+            match chain_turns_towards(a, w, &dir, reach, &n, 1.0, &dist) {
+                Some(least) if outside(dist_line, least) => {}
+                _ => return None,
+            }
+            Some(PairRows {
+                n,
+                distance: dist_line,
+                weight: [1.0 - t, t, 0.0, 0.0],
+                ..*r
+            })
+        }
+        // a face's plane past its boundary: not measured to help, and over a surface's edge
+        // it runs through free space
+        ContactPair::PointTriangle { .. } => None,
+        ContactPair::EdgeEdge { a, b } => {
+            let (ea, eb) = (mesh.edges[a], mesh.edges[b]);
+            // curves only: a surface's edge extended runs over its faces (or past its border)
+            if ea
+                .iter()
+                .chain(&eb)
+                .any(|&v| !adj.vertex_faces[v].is_empty())
+            {
+                return None;
+            }
+            let (a0, a1, b0, b1) = (p3v(ea[0]), p3v(ea[1]), p3v(eb[0]), p3v(eb[1]));
+            let (da, db, w0) = (a1 - a0, b1 - b0, a0 - b0);
+            let (aa, ab, bb) = (da.dot(&da), da.dot(&db), db.dot(&db));
+            let (ad, bd) = (da.dot(&w0), db.dot(&w0));
+            let den = aa * bb - ab * ab;
+            // nearly parallel lines: their distance is ill-conditioned
+            if den.is_nan() || den <= 1e-4 * aa * bb {
+                return None;
+            }
+            let s = (ab * bd - bb * ad) / den;
+            let tt = (aa * bd - ab * ad) / den;
+            if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&tt) {
+                return None;
+            }
+            let (pa, pb) = (a0 + da * s, b0 + db * tt);
+            let dist = (pb - pa).norm();
+            if dist.is_nan() || dist <= 0.0 {
+                return None;
+            }
+            let n = (pb - pa) / dist;
+            // past an end of b: b's body turns towards a (−n); past an end of a: towards b (+n)
+            let past = |e: [usize; 2], d: Vector3<f64>, u: f64| {
+                let len = d.norm();
+                if u < 0.0 {
+                    (e[0], -d / len, -u * len)
+                } else {
+                    (e[1], d / len, (u - 1.0) * len)
+                }
+            };
+            // the distance of edge `of` to a chain edge `e`
+            let seg = |of: [usize; 2], e: usize| {
+                let ee = mesh.edges[e];
+                edge_edge_distance(&p3v(of[0]), &p3v(of[1]), &p3v(ee[0]), &p3v(ee[1])).distance
+            };
+            let ok_b = (0.0..=1.0).contains(&tt) || {
+                let (w, dir, reach) = past(eb, db, tt);
+                matches!(chain_turns_towards(b, w, &dir, reach, &n, 1.0, &|e| seg(ea, e)),
+                    Some(least) if outside(dist, least))
+            };
+            let ok_a = (0.0..=1.0).contains(&s) || {
+                let (w, dir, reach) = past(ea, da, s);
+                matches!(chain_turns_towards(a, w, &dir, reach, &n, -1.0, &|e| seg(eb, e)),
+                    Some(least) if outside(dist, least))
+            };
+            if !(ok_a && ok_b) {
+                return None;
+            }
+            let (wa, wb) = ([1.0 - s, s], [1.0 - tt, tt]);
+            Some(PairRows {
+                n,
+                distance: dist,
+                weight: [wa[0] * wb[0], wa[0] * wb[1], wa[1] * wb[0], wa[1] * wb[1]],
+                ..*r
+            })
         }
     }
 }
@@ -630,19 +871,34 @@ pub(crate) fn sqp_step(
     let (trigger, target) = (eps + 0.5 * delta, eps_qp);
     let tp = Instant::now();
     let search = AnyMotionSearch::new(mesh, x);
-    let mut rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
+    let rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
         .into_iter()
         .filter_map(|p| pair_rows(mesh, x, p))
         .collect();
     let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
-    let adjacency = ctx.sqp.drop_endpoint_rows.then(|| Adjacency::new(mesh));
-    if let Some(adj) = &adjacency {
-        let interior: PairSet = rows
-            .iter()
-            .filter(|r| interior_row(r))
+    let (extend, endpoint, vertex) = (
+        ctx.sqp.extend_rows,
+        ctx.sqp.drop_endpoint_rows,
+        ctx.sqp.drop_vertex_rows,
+    );
+    let adjacency = (extend || endpoint || vertex).then(|| Adjacency::new(mesh));
+    // a pair's row, against the extended element where `extended_row` takes it
+    let extended = |r: PairRows| -> PairRows {
+        match (&adjacency, extend) {
+            (Some(adj), true) => extended_row(mesh, x, &r, adj).unwrap_or(r),
+            _ => r,
+        }
+    };
+    // the rows that imply others: interior rows and extended rows
+    let trusted = |rows: &mut dyn Iterator<Item = &PairRows>| -> PairSet {
+        rows.filter(|r| interior_row(r) || is_extended(r))
             .map(|r| r.pair)
-            .collect();
-        rows.retain(|r| !implied_row(mesh, r, &interior, adj));
+            .collect()
+    };
+    let mut rows: Vec<PairRows> = rows.into_iter().map(extended).collect();
+    if let (Some(adj), true) = (&adjacency, endpoint || vertex) {
+        let t = trusted(&mut rows.iter());
+        rows.retain(|r| !implied_row(mesh, r, &t, endpoint, vertex, adj));
     }
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
@@ -694,6 +950,7 @@ pub(crate) fn sqp_step(
             .into_iter()
             .filter(|p| !carried.contains(p))
             .filter_map(|p| pair_rows(mesh, x, p))
+            .map(extended)
             .map(|r| {
                 let v = linear_value(&r, &full);
                 (r, v)
@@ -706,16 +963,11 @@ pub(crate) fn sqp_step(
         }
         let pick = most_violated_per_point(violated.iter().map(|(r, v)| (r.pair, *v)));
         let mut picked: Vec<PairRows> = pick.into_iter().map(|i| violated[i].0).collect();
-        if let Some(adj) = &adjacency {
+        if let (Some(adj), true) = (&adjacency, endpoint || vertex) {
             // rows implied by the QP's rows or by this round's: left out, and not asked again
-            let interior: PairSet = rows
-                .iter()
-                .chain(&picked)
-                .filter(|r| interior_row(r))
-                .map(|r| r.pair)
-                .collect();
+            let t = trusted(&mut rows.iter().chain(&picked));
             picked.retain(|r| {
-                let implied = implied_row(mesh, r, &interior, adj);
+                let implied = implied_row(mesh, r, &t, endpoint, vertex, adj);
                 if implied {
                     carried.insert(r.pair);
                 }
@@ -737,6 +989,14 @@ pub(crate) fn sqp_step(
             y.extend_from_slice(&sol.y[nold..]);
             y
         });
+    };
+    // the rows reported (and their multipliers spread): the pairs' own rows at x
+    let rows: Vec<PairRows> = if extend {
+        rows.iter()
+            .map(|r| pair_rows(mesh, x, r.pair).unwrap_or(*r))
+            .collect()
+    } else {
+        rows
     };
     out.multipliers = rows
         .iter()
@@ -975,9 +1235,16 @@ mod tests {
             "closest point of the second edge: v1"
         );
         let interior: PairSet = [on_first.pair].into_iter().collect();
-        assert!(implied_row(&mesh, &on_second, &interior, &adj));
-        assert!(!implied_row(&mesh, &on_first, &interior, &adj));
-        assert!(!implied_row(&mesh, &on_second, &PairSet::default(), &adj));
+        assert!(implied_row(&mesh, &on_second, &interior, true, false, &adj));
+        assert!(!implied_row(&mesh, &on_first, &interior, true, false, &adj));
+        assert!(!implied_row(
+            &mesh,
+            &on_second,
+            &PairSet::default(),
+            true,
+            false,
+            &adj
+        ));
         // a vertex beyond the far end v2: closest point v2 on the second edge, no other edge
         let mut far = x.clone();
         far[6] = 2.5;
@@ -987,7 +1254,7 @@ mod tests {
         let interior: PairSet = [ContactPair::PointEdge { x: 3, a: 0 }]
             .into_iter()
             .collect();
-        assert!(!implied_row(&mesh, &at_v2, &interior, &adj));
+        assert!(!implied_row(&mesh, &at_v2, &interior, true, false, &adj));
     }
 
     /// 3D edges: an edge crossing above the first of two edges meeting at u1 is closest to u1
@@ -1009,9 +1276,16 @@ mod tests {
         assert!(!interior_row(&at_u1));
         assert!((at_u1.distance - 0.1f64.hypot(0.2)).abs() < 1e-12);
         let interior: PairSet = [crossing.pair].into_iter().collect();
-        assert!(implied_row(&mesh, &at_u1, &interior, &adj));
-        assert!(!implied_row(&mesh, &crossing, &interior, &adj));
-        assert!(!implied_row(&mesh, &at_u1, &PairSet::default(), &adj));
+        assert!(implied_row(&mesh, &at_u1, &interior, true, false, &adj));
+        assert!(!implied_row(&mesh, &crossing, &interior, true, false, &adj));
+        assert!(!implied_row(
+            &mesh,
+            &at_u1,
+            &PairSet::default(),
+            true,
+            false,
+            &adj
+        ));
     }
 
     /// Leaving the implied endpoint rows out keeps every iterate admissible and J monotone
@@ -1029,6 +1303,129 @@ mod tests {
         // rows were left out: the path is another one
         let path = |r: &[IterationRecord]| r.iter().map(|r| r.energy).collect::<Vec<f64>>();
         assert_ne!(path(&keep), path(&drop));
+    }
+
+    /// 2D: a vertex over the second of two edges that turn up towards it (a cup) is closest to
+    /// their shared vertex on the first; that row is taken against the first edge's line, and
+    /// not where the edges turn away (a ridge), not past the end of the chain, and not from
+    /// inside a solid's triangle.
+    #[test]
+    fn a_row_past_a_cup_is_taken_against_the_extended_edge() {
+        // lower: v0 (−1, 0), v1 (0, 0), v2 (1, 0.5); upper: v3 (0.5, 0.4), v4 (0.5, 1)
+        let cup = two_curves(2, vec![-1.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.5, 0.4, 0.5, 1.0]);
+        let x = cup.x_ref.clone();
+        let adj = Adjacency::new(&cup);
+        let own = pair_rows(&cup, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        assert_eq!(own.weight[1], 1.0, "closest point of the first edge: v1");
+        let ext = extended_row(&cup, &x, &own, &adj).expect("a cup: extended");
+        assert!((ext.distance - 0.4).abs() < 1e-12, "{}", ext.distance);
+        assert!((ext.weight[0] + 0.5).abs() < 1e-12 && (ext.weight[1] - 1.5).abs() < 1e-12);
+        assert!(is_extended(&ext) && !is_extended(&own));
+        // the row's value at x is the distance to the line, and it is at most the own row's
+        assert!((linear_value(&ext, &x) - 0.4).abs() < 1e-12);
+        assert!(ext.distance <= own.distance);
+        // a ridge: v2 at (1, −0.5), the second edge turns away from v3
+        let mut ridge = cup.clone();
+        ridge.x_ref[5] = -0.5;
+        ridge.x_ref[7] = 0.1;
+        let xr = ridge.x_ref.clone();
+        let own = pair_rows(&ridge, &xr, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        assert_eq!(own.weight[1], 1.0);
+        assert!(extended_row(&ridge, &xr, &own, &Adjacency::new(&ridge)).is_none());
+        // past the chain's end: v3 at x = 2, beyond v2 (x = 1)
+        let mut past = x.clone();
+        past[6] = 2.0;
+        past[7] = 1.5;
+        let own = pair_rows(&cup, &past, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        assert!(extended_row(&cup, &past, &own, &adj).is_none());
+        // a solid's edge faced from inside: a triangle (v0, v1, v4) on v3's side of the line
+        let mut solid = cup.clone();
+        solid.triangles = vec![[0, 1, 4]];
+        let own = pair_rows(&solid, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        assert!(extended_row(&solid, &x, &own, &Adjacency::new(&solid)).is_none());
+        // faced from outside: the triangle's third vertex (v4 moved to (0.5, −1)) beyond the line
+        solid.x_ref[9] = -1.0;
+        let xs = solid.x_ref.clone();
+        let own = pair_rows(&solid, &xs, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
+        assert!(extended_row(&solid, &xs, &own, &Adjacency::new(&solid)).is_some());
+    }
+
+    /// 3D curves: an edge crossing above the extension of the first of two edges that turn up
+    /// towards it gets the line–line row; where they turn away it keeps its own row.
+    #[test]
+    fn an_edge_edge_row_past_a_cup_is_taken_between_the_lines() {
+        // lower: u0 (−1,0,0), u1 (0,0,0), u2 (1,0,0.5); upper: (0.5,−1,0.7) to (0.5,1,0.7)
+        let mut x_ref = vec![
+            -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.5, 0.5, -1.0, 0.7, 0.5, 1.0, 0.7,
+        ];
+        let cup = two_curves(3, x_ref.clone());
+        let adj = Adjacency::new(&cup);
+        let own = pair_rows(&cup, &x_ref, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
+        assert!(!interior_row(&own));
+        let ext = extended_row(&cup, &x_ref, &own, &adj).expect("a cup: extended");
+        assert!((ext.distance - 0.7).abs() < 1e-12, "{}", ext.distance);
+        assert!((linear_value(&ext, &x_ref) - 0.7).abs() < 1e-12);
+        assert!(ext.distance <= own.distance);
+        x_ref[8] = -0.5;
+        let ridge = two_curves(3, x_ref.clone());
+        let own = pair_rows(&ridge, &x_ref, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
+        assert!(extended_row(&ridge, &x_ref, &own, &Adjacency::new(&ridge)).is_none());
+    }
+
+    /// 2D: a vertex whose closest point on an edge of the other body is that body's vertex v is
+    /// implied by v's row against an edge at the first vertex, with `vertex` only.
+    #[test]
+    fn a_vertex_to_vertex_row_is_implied_by_the_other_vertex_row() {
+        // lower: v0 (0, 0), v1 (1, 0), v2 (2, 0); upper: v3 (2.3, 0.2), v4 (3.3, 0.2)
+        let mesh = two_curves(2, vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 2.3, 0.2, 3.3, 0.2]);
+        let x = mesh.x_ref.clone();
+        let adj = Adjacency::new(&mesh);
+        let at_v2 = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
+        assert_eq!(at_v2.weight[1], 1.0, "closest point: v2");
+        let other = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 2, a: 2 }).unwrap();
+        let trusted: PairSet = [other.pair].into_iter().collect();
+        assert!(implied_row(&mesh, &at_v2, &trusted, false, true, &adj));
+        assert!(!implied_row(&mesh, &at_v2, &trusted, true, false, &adj));
+        assert!(!implied_row(
+            &mesh,
+            &at_v2,
+            &PairSet::default(),
+            false,
+            true,
+            &adj
+        ));
+    }
+
+    /// The extended rows and the vertex rows left out keep every iterate admissible and J
+    /// monotone (checked in `sqp_run`) and end at the same energy as with every row, to the
+    /// margin, alone and with the endpoint rows left out.
+    #[test]
+    fn extended_rows_and_vertex_rows_stay_admissible_and_reach_the_same_energy() {
+        let (keep, _, _) = sqp_run(SqpSettings::default());
+        let jk = keep.last().unwrap().energy;
+        for sqp in [
+            SqpSettings {
+                extend_rows: true,
+                ..SqpSettings::default()
+            },
+            SqpSettings {
+                drop_vertex_rows: true,
+                ..SqpSettings::default()
+            },
+            SqpSettings {
+                extend_rows: true,
+                drop_endpoint_rows: true,
+                drop_vertex_rows: true,
+                ..SqpSettings::default()
+            },
+        ] {
+            let (recs, _, _) = sqp_run(sqp.clone());
+            let j = recs.last().unwrap().energy;
+            assert!(
+                (jk - j).abs() <= 1e-6 * jk.abs(),
+                "{sqp:?}: J {j} against {jk}"
+            );
+        }
     }
 
     #[test]

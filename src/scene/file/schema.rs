@@ -47,6 +47,12 @@ pub struct SolverSpec {
     /// SQP: leave out the rows implied by another row of the same vertex or edge (used with
     /// `outer_method = "sqp"`).
     pub sqp_drop_endpoint_rows: Option<bool>,
+    /// SQP: rows against the extended element where the body turns towards the other side
+    /// (used with `outer_method = "sqp"`).
+    pub sqp_extend_rows: Option<bool>,
+    /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied
+    /// by that vertex's row (used with `outer_method = "sqp"`).
+    pub sqp_drop_vertex_rows: Option<bool>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
