@@ -579,8 +579,9 @@ fn is_extended(r: &PairRows) -> bool {
 ///   implied by another edge at `u` against `b` (or `a` against another edge at `w`).
 ///
 /// With `vertex` (`--sqp-drop-vertex-rows`, 2D): vertex `x` and edge `a` with its closest point
-/// at the endpoint `v`, a vertex of the other body: the distance is `|x − v|`, at least the
-/// distance from `v` to any edge at `x`, so it is implied by `v` against an edge at `x`.
+/// at the endpoint `v` (a corner of the other body, or of the same one in self-contact): the
+/// distance is `|x − v|`, at least the distance from `v` to any edge at `x`, so it is implied
+/// by `v` against an edge at `x`.
 fn implied_row(
     mesh: &Mesh,
     r: &PairRows,
@@ -757,7 +758,7 @@ fn extended_row(mesh: &Mesh, x: &[f64], r: &PairRows, adj: &Adjacency) -> Option
                     }
                 }
             }
-            // the other edges at w have their far ends on p's side (−n) or on the line
+            // the chain past w turns towards p, and p is outside it
             let dist = |e: usize| {
                 let ee = mesh.edges[e];
                 let (q0, q1) = (p3v(ee[0]), p3v(ee[1]));
