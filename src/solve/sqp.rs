@@ -872,11 +872,6 @@ pub(crate) fn sqp_step(
     let (trigger, target) = (eps + 0.5 * delta, eps_qp);
     let tp = Instant::now();
     let search = AnyMotionSearch::new(mesh, x);
-    let rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
-        .into_iter()
-        .filter_map(|p| pair_rows(mesh, x, p))
-        .collect();
-    let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
     let (extend, endpoint, vertex) = (
         ctx.sqp.extend_rows,
         ctx.sqp.drop_endpoint_rows,
@@ -896,7 +891,12 @@ pub(crate) fn sqp_step(
             .map(|r| r.pair)
             .collect()
     };
-    let mut rows: Vec<PairRows> = rows.into_iter().map(extended).collect();
+    let mut rows: Vec<PairRows> = near_pairs(mesh, x, eps_qp + ctx.start_radius, true)
+        .into_iter()
+        .filter_map(|p| pair_rows(mesh, x, p))
+        .map(extended)
+        .collect();
+    let mut carried: PairSet = rows.iter().map(|r| r.pair).collect();
     if let (Some(adj), true) = (&adjacency, endpoint || vertex) {
         let t = trusted(&mut rows.iter());
         rows.retain(|r| !implied_row(mesh, r, &t, endpoint, vertex, adj));
@@ -992,13 +992,14 @@ pub(crate) fn sqp_step(
         });
     };
     // the rows reported (and their multipliers spread): the pairs' own rows at x
-    let rows: Vec<PairRows> = if extend {
-        rows.iter()
-            .map(|r| pair_rows(mesh, x, r.pair).unwrap_or(*r))
-            .collect()
-    } else {
-        rows
-    };
+    // (an extended row has a negative weight; the pairs' own rows have none)
+    if extend {
+        for r in rows.iter_mut() {
+            if r.weight[..r.len].iter().any(|&w| w < 0.0) {
+                *r = pair_rows(mesh, x, r.pair).unwrap_or(*r);
+            }
+        }
+    }
     out.multipliers = rows
         .iter()
         .enumerate()
