@@ -549,7 +549,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     std::fs::create_dir_all(&dir).unwrap();
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
                   sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\
-                  sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\n";
+                  sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\
+                  sqp_path_rows = true\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
         let src = std::fs::read_to_string(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -599,6 +600,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 .unwrap(),
             s["settings"]["sqp"]["extend_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["drop_vertex_rows"].as_bool().unwrap(),
+            s["settings"]["sqp"]["path_rows"].as_bool().unwrap(),
         )
     };
     for (name, dynamic) in [
@@ -608,7 +610,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // the file's values
         assert_eq!(
             sqp(&summary(name, dynamic)),
-            ("psd".into(), 0.01, true, true, true),
+            ("psd".into(), 0.01, true, true, true, true),
             "{name}"
         );
         // a flag given on the command line wins, even at its default value; the other key
@@ -616,7 +618,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("off".into(), 0.01, true, true, true),
+            ("off".into(), 0.01, true, true, true, true),
             "{name}"
         );
         let flags = [
@@ -630,12 +632,14 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "false",
                 "--sqp-extend-rows",
                 "false",
+                "--sqp-path-rows",
+                "false",
             ],
         ]
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0, false, false, true),
+            ("tangent".into(), 0.0, false, false, true, false),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -656,7 +660,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &pantz,
             &[
                 "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
-                 --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows",
+                 --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows and \
+                 --sqp-path-rows",
                 "pantz",
             ],
         );
@@ -665,7 +670,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &flags,
             &[
                 "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows and \
-                 --sqp-extend-rows and --sqp-drop-vertex-rows",
+                 --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-path-rows",
                 "pantz",
             ],
         );
@@ -681,6 +686,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "--sqp-extend-rows",
                 "false",
                 "--sqp-drop-vertex-rows",
+                "false",
+                "--sqp-path-rows",
                 "false",
             ],
         ]
@@ -712,6 +719,11 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-drop-vertex-rows", "true"][..],
             "refused_ring_vertex",
             "--sqp-drop-vertex-rows set with the pantz outer method",
+        ),
+        (
+            &["--sqp-path-rows"][..],
+            "refused_ring_path",
+            "--sqp-path-rows set with the pantz outer method",
         ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))

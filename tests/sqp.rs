@@ -161,3 +161,67 @@ fn sqp_endgame_stops_where_the_steps_collapse() {
         "last step length {last}"
     );
 }
+
+/// `rod` n = 16 (a string's upper strand sliding over its lower strand, edge–edge rows), by
+/// the SQP method with every row and with `path_rows`: a linearized row enters the QP only
+/// where its pair comes within ε + δ on the step's straight path. Every iterate passes the
+/// all-pairs check and J never rises; both runs end certified at the same energy, and the
+/// path rows do it in fewer outer steps (measured: 34 against 60, `results/sqp_path_rows.csv`).
+#[test]
+fn sqp_path_rows_keep_the_rod_admissible_and_reach_the_same_minimum_sooner() {
+    use contactlab::scene::rod::{build, RodParams};
+    let scene = build(&RodParams {
+        n: 16,
+        ..Default::default()
+    })
+    .unwrap();
+    let (mesh, eps) = (&scene.mesh, scene.eps);
+    let checked = |path_rows: bool| -> RunResult {
+        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+        let mut settings = OuterSettings {
+            method: OuterMethod::Sqp,
+            ..Default::default()
+        };
+        settings.sqp.path_rows = path_rows;
+        let mut last = f64::INFINITY;
+        let res = run(
+            mesh,
+            &scene.energy,
+            eps,
+            &scene.x0,
+            b.as_mut(),
+            &settings,
+            &mut |r, x| {
+                let d = min_distance_brute_force(mesh, x).distance;
+                assert!(
+                    d >= eps * (1.0 - 1e-12),
+                    "path_rows {path_rows}: iterate {} at distance {d:e} < eps {eps:e}",
+                    r.iteration
+                );
+                assert!(
+                    r.energy <= last,
+                    "path_rows {path_rows}: J rose at {}",
+                    r.iteration
+                );
+                last = r.energy;
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            res.status,
+            RunStatus::Converged,
+            "path_rows {path_rows}: κ {:e}",
+            res.certificate.kappa
+        );
+        res
+    };
+    let (every, path) = (checked(false), checked(true));
+    let (je, jp) = (every.energy, path.energy);
+    assert!((je - jp).abs() <= 1e-9 * je.abs(), "J {jp} against {je}");
+    assert!(
+        path.outer_iterations < every.outer_iterations,
+        "{} outer steps with path rows, {} with every row",
+        path.outer_iterations,
+        every.outer_iterations
+    );
+}

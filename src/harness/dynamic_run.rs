@@ -180,6 +180,7 @@ fn run_prepared(
         sqp_drop_endpoint_rows: rs.sqp_drop_endpoint_rows,
         sqp_extend_rows: rs.sqp_extend_rows,
         sqp_drop_vertex_rows: rs.sqp_drop_vertex_rows,
+        sqp_path_rows: rs.sqp_path_rows,
     };
     let qps = rs.qp_settings();
     let out = a

@@ -76,6 +76,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_drop_endpoint_rows: false,
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
+        sqp_path_rows: false,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -128,6 +128,12 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_drop_vertex_rows: bool,
+    /// SQP: add a row the QP's solution violates only where the pair's exact distance comes
+    /// within ε + δ on the straight motion to that solution (docs/method.md, "Rows by the
+    /// step's path"). `--sqp-path-rows false` turns off a scene file's `sqp_path_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_path_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -378,6 +384,7 @@ fn scene_from_file(
     from_file!("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows);
     from_file!("sqp_extend_rows", sqp_extend_rows);
     from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
+    from_file!("sqp_path_rows", sqp_path_rows);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -409,6 +416,7 @@ impl RunArgs {
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
+            sqp_path_rows: self.sqp_path_rows,
         }
     }
 }
@@ -443,6 +451,7 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_drop_vertex_rows,
                 String::new(),
             ),
+            ("--sqp-path-rows", settings.sqp_path_rows, String::new()),
         ]
         .into_iter()
         .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
@@ -451,7 +460,7 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
-                 --sqp-drop-vertex-rows, or the same keys with underscores in a scene file's \
+                 --sqp-drop-vertex-rows, --sqp-path-rows, or the same keys with underscores in a scene file's \
                  [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()

@@ -169,6 +169,9 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_drop_vertex_rows {
         s.sqp_drop_vertex_rows = v;
     }
+    if let Some(v) = spec.sqp_path_rows {
+        s.sqp_path_rows = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }

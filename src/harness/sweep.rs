@@ -207,6 +207,9 @@ pub struct Common {
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied by
     /// that vertex's row (default false; with `outer_method = "sqp"` only).
     pub sqp_drop_vertex_rows: Option<bool>,
+    /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
+    /// path (default false; with `outer_method = "sqp"` only).
+    pub sqp_path_rows: Option<bool>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -409,6 +412,7 @@ struct BlockSettings {
     sqp_drop_endpoint_rows: bool,
     sqp_extend_rows: bool,
     sqp_drop_vertex_rows: bool,
+    sqp_path_rows: bool,
     reference: Option<ReferenceSpec>,
 }
 
@@ -483,6 +487,7 @@ impl BlockSettings {
             .sqp_drop_vertex_rows
             .or(defaults.sqp_drop_vertex_rows)
             .unwrap_or(false);
+        let sqp_path_rows = c.sqp_path_rows.or(defaults.sqp_path_rows).unwrap_or(false);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -520,6 +525,7 @@ impl BlockSettings {
                 ("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows),
                 ("sqp_extend_rows", sqp_extend_rows),
                 ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
+                ("sqp_path_rows", sqp_path_rows),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
@@ -527,8 +533,8 @@ impl BlockSettings {
             if !set.is_empty() {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
-                     sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows and \
-                     sqp_drop_vertex_rows apply to outer_method = \"sqp\" only",
+                     sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
+                     sqp_drop_vertex_rows and sqp_path_rows apply to outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
@@ -577,6 +583,7 @@ impl BlockSettings {
             sqp_drop_endpoint_rows,
             sqp_extend_rows,
             sqp_drop_vertex_rows,
+            sqp_path_rows,
             reference,
         })
     }
@@ -609,6 +616,7 @@ impl BlockSettings {
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
+            sqp_path_rows: self.sqp_path_rows,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -631,12 +639,12 @@ impl BlockSettings {
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
 /// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
-/// endpoint rows, extended rows, dropped vertex rows) only when set, so that the keys of
+/// endpoint rows, extended rows, dropped vertex rows, path rows) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -686,7 +694,8 @@ fn run_key(spec: &RunSpec) -> String {
             "|drop-vertex-rows"
         } else {
             ""
-        }
+        },
+        if s.sqp_path_rows { "|path-rows" } else { "" }
     )
 }
 
@@ -935,6 +944,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_drop_endpoint_rows: false,
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
+        sqp_path_rows: false,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,
@@ -1272,6 +1282,27 @@ mod tests {
         );
         let runs = ring("outer_method = \"sqp\"\nsqp_normal_stiffness = 1").unwrap();
         assert_eq!(runs[0].key, format!("{plain}|method=sqp|gamma=1.0"));
+        // the row options: in the outer settings and the key, in a fixed order
+        let runs = ring(
+            "outer_method = \"sqp\"\nsqp_path_rows = true\nsqp_drop_vertex_rows = true\n\
+             sqp_extend_rows = true\nsqp_drop_endpoint_rows = true",
+        )
+        .unwrap();
+        let o = case::outer_settings(&runs[0].settings);
+        assert!(o.sqp.path_rows && o.sqp.extend_rows);
+        assert!(o.sqp.drop_vertex_rows && o.sqp.drop_endpoint_rows);
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|drop-endpoint-rows|extend-rows|drop-vertex-rows|path-rows")
+        );
+        let runs = ring("outer_method = \"sqp\"\nsqp_path_rows = true").unwrap();
+        assert!(case::outer_settings(&runs[0].settings).sqp.path_rows);
+        assert_eq!(runs[0].key, format!("{plain}|method=sqp|path-rows"));
+        let err = ring("sqp_path_rows = true").err().unwrap().to_string();
+        assert!(
+            err.contains("sqp_path_rows set with outer_method = \"pantz\""),
+            "{err}"
+        );
         // a block overrides the defaults, key by key
         let runs = parse(
             "[defaults]\nouter_method = \"sqp\"\nsqp_curvature = \"full\"\n\

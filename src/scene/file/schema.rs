@@ -53,6 +53,9 @@ pub struct SolverSpec {
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied
     /// by that vertex's row (used with `outer_method = "sqp"`).
     pub sqp_drop_vertex_rows: Option<bool>,
+    /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
+    /// path (used with `outer_method = "sqp"`).
+    pub sqp_path_rows: Option<bool>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
