@@ -550,7 +550,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
                   sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\
                   sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\
-                  sqp_path_rows = true\n\n";
+                  sqp_path_rows = true\nsqp_implying_rows = true\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
         let src = std::fs::read_to_string(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -601,6 +601,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             s["settings"]["sqp"]["extend_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["drop_vertex_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["path_rows"].as_bool().unwrap(),
+            s["settings"]["sqp"]["implying_rows"].as_bool().unwrap(),
         )
     };
     for (name, dynamic) in [
@@ -610,7 +611,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // the file's values
         assert_eq!(
             sqp(&summary(name, dynamic)),
-            ("psd".into(), 0.01, true, true, true, true),
+            ("psd".into(), 0.01, true, true, true, true, true),
             "{name}"
         );
         // a flag given on the command line wins, even at its default value; the other key
@@ -618,7 +619,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("off".into(), 0.01, true, true, true, true),
+            ("off".into(), 0.01, true, true, true, true, true),
             "{name}"
         );
         let flags = [
@@ -639,7 +640,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0, false, false, true, false),
+            ("tangent".into(), 0.0, false, false, true, false, true),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -661,7 +662,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &[
                 "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
                  --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows and \
-                 --sqp-path-rows",
+                 --sqp-path-rows and --sqp-implying-rows",
                 "pantz",
             ],
         );
@@ -670,7 +671,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &flags,
             &[
                 "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows and \
-                 --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-path-rows",
+                 --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-path-rows and \
+                 --sqp-implying-rows",
                 "pantz",
             ],
         );
@@ -688,6 +690,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "--sqp-drop-vertex-rows",
                 "false",
                 "--sqp-path-rows",
+                "false",
+                "--sqp-implying-rows",
                 "false",
             ],
         ]
@@ -724,6 +728,11 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-path-rows"][..],
             "refused_ring_path",
             "--sqp-path-rows set with the pantz outer method",
+        ),
+        (
+            &["--outer-method", "sqp", "--sqp-implying-rows"][..],
+            "refused_ring_implying",
+            "--sqp-implying-rows set without --sqp-drop-endpoint-rows or --sqp-drop-vertex-rows",
         ),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))

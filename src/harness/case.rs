@@ -56,6 +56,8 @@ pub struct CaseSettings {
     pub sqp_drop_vertex_rows: bool,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's path.
     pub sqp_path_rows: bool,
+    /// SQP: add the rows that would imply a violated endpoint or vertex row.
+    pub sqp_implying_rows: bool,
 }
 
 /// A finished case.
@@ -149,6 +151,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.extend_rows = cs.sqp_extend_rows;
     settings.sqp.drop_vertex_rows = cs.sqp_drop_vertex_rows;
     settings.sqp.path_rows = cs.sqp_path_rows;
+    settings.sqp.implying_rows = cs.sqp_implying_rows;
     settings
 }
 

@@ -181,6 +181,7 @@ fn run_prepared(
         sqp_extend_rows: rs.sqp_extend_rows,
         sqp_drop_vertex_rows: rs.sqp_drop_vertex_rows,
         sqp_path_rows: rs.sqp_path_rows,
+        sqp_implying_rows: rs.sqp_implying_rows,
     };
     let qps = rs.qp_settings();
     let out = a

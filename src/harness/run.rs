@@ -134,6 +134,13 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_path_rows: bool,
+    /// SQP, 2D, with --sqp-drop-endpoint-rows or --sqp-drop-vertex-rows: where a violated row
+    /// would be left out if a row implying it were in the QP, add that row (interior, or
+    /// extended with --sqp-extend-rows) in the lazy round (docs/method.md, "Adding the implying
+    /// rows"). `--sqp-implying-rows false` turns off a scene file's `sqp_implying_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_implying_rows: bool,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -385,6 +392,7 @@ fn scene_from_file(
     from_file!("sqp_extend_rows", sqp_extend_rows);
     from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
     from_file!("sqp_path_rows", sqp_path_rows);
+    from_file!("sqp_implying_rows", sqp_implying_rows);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -417,6 +425,7 @@ impl RunArgs {
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_path_rows: self.sqp_path_rows,
+            sqp_implying_rows: self.sqp_implying_rows,
         }
     }
 }
@@ -452,6 +461,11 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 String::new(),
             ),
             ("--sqp-path-rows", settings.sqp_path_rows, String::new()),
+            (
+                "--sqp-implying-rows",
+                settings.sqp_implying_rows,
+                String::new(),
+            ),
         ]
         .into_iter()
         .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
@@ -460,12 +474,21 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
-                 --sqp-drop-vertex-rows, --sqp-path-rows, or the same keys with underscores in a scene file's \
-                 [solver]) apply to --outer-method sqp only",
+                 --sqp-drop-vertex-rows, --sqp-path-rows, --sqp-implying-rows, or the same keys \
+                 with underscores in a scene file's [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );
         }
+    }
+    if settings.sqp_implying_rows
+        && !(settings.sqp_drop_endpoint_rows || settings.sqp_drop_vertex_rows)
+    {
+        bail!(
+            "--sqp-implying-rows set without --sqp-drop-endpoint-rows or --sqp-drop-vertex-rows \
+             (or the same keys in a scene file's [solver]): it adds the rows that imply the rows \
+             those options leave out, and does nothing without them"
+        );
     }
     let Err(e) = settings.validate() else {
         return Ok(());

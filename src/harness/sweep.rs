@@ -210,6 +210,9 @@ pub struct Common {
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (default false; with `outer_method = "sqp"` only).
     pub sqp_path_rows: Option<bool>,
+    /// SQP, 2D: with the endpoint or vertex rows left out, add the rows that would imply a
+    /// violated one (default false; with `outer_method = "sqp"` and one of those only).
+    pub sqp_implying_rows: Option<bool>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -413,6 +416,7 @@ struct BlockSettings {
     sqp_extend_rows: bool,
     sqp_drop_vertex_rows: bool,
     sqp_path_rows: bool,
+    sqp_implying_rows: bool,
     reference: Option<ReferenceSpec>,
 }
 
@@ -488,6 +492,10 @@ impl BlockSettings {
             .or(defaults.sqp_drop_vertex_rows)
             .unwrap_or(false);
         let sqp_path_rows = c.sqp_path_rows.or(defaults.sqp_path_rows).unwrap_or(false);
+        let sqp_implying_rows = c
+            .sqp_implying_rows
+            .or(defaults.sqp_implying_rows)
+            .unwrap_or(false);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -526,6 +534,7 @@ impl BlockSettings {
                 ("sqp_extend_rows", sqp_extend_rows),
                 ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
                 ("sqp_path_rows", sqp_path_rows),
+                ("sqp_implying_rows", sqp_implying_rows),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
@@ -534,11 +543,19 @@ impl BlockSettings {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
-                     sqp_drop_vertex_rows and sqp_path_rows apply to outer_method = \"sqp\" only",
+                     sqp_drop_vertex_rows, sqp_path_rows and sqp_implying_rows apply to \
+                     outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
             }
+        }
+        if sqp_implying_rows && !(sqp_drop_endpoint_rows || sqp_drop_vertex_rows) {
+            bail!(
+                "{at}: sqp_implying_rows set without sqp_drop_endpoint_rows or \
+                 sqp_drop_vertex_rows: it adds the rows that imply the rows those keys leave \
+                 out, and does nothing without them"
+            );
         }
         if time_limit_s.is_some() && b.dynamic {
             bail!(
@@ -584,6 +601,7 @@ impl BlockSettings {
             sqp_extend_rows,
             sqp_drop_vertex_rows,
             sqp_path_rows,
+            sqp_implying_rows,
             reference,
         })
     }
@@ -617,6 +635,7 @@ impl BlockSettings {
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_path_rows: self.sqp_path_rows,
+            sqp_implying_rows: self.sqp_implying_rows,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -639,12 +658,12 @@ impl BlockSettings {
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
 /// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
-/// endpoint rows, extended rows, dropped vertex rows, path rows) only when set, so that the keys of
+/// endpoint rows, extended rows, dropped vertex rows, path rows, implying rows) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -695,7 +714,12 @@ fn run_key(spec: &RunSpec) -> String {
         } else {
             ""
         },
-        if s.sqp_path_rows { "|path-rows" } else { "" }
+        if s.sqp_path_rows { "|path-rows" } else { "" },
+        if s.sqp_implying_rows {
+            "|implying-rows"
+        } else {
+            ""
+        }
     )
 }
 
@@ -945,6 +969,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
         sqp_path_rows: false,
+        sqp_implying_rows: false,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,
@@ -1298,6 +1323,22 @@ mod tests {
         let runs = ring("outer_method = \"sqp\"\nsqp_path_rows = true").unwrap();
         assert!(case::outer_settings(&runs[0].settings).sqp.path_rows);
         assert_eq!(runs[0].key, format!("{plain}|method=sqp|path-rows"));
+        let runs =
+            ring("outer_method = \"sqp\"\nsqp_drop_vertex_rows = true\nsqp_implying_rows = true")
+                .unwrap();
+        assert!(case::outer_settings(&runs[0].settings).sqp.implying_rows);
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|drop-vertex-rows|implying-rows")
+        );
+        let err = ring("outer_method = \"sqp\"\nsqp_implying_rows = true")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("sqp_implying_rows set without sqp_drop_endpoint_rows"),
+            "{err}"
+        );
         let err = ring("sqp_path_rows = true").err().unwrap().to_string();
         assert!(
             err.contains("sqp_path_rows set with outer_method = \"pantz\""),

@@ -144,6 +144,9 @@ pub struct RunSettings {
     /// SQP: add a violated row only where the pair comes within `ε + δ` on the step's straight
     /// path (`--sqp-path-rows`).
     pub sqp_path_rows: bool,
+    /// SQP: with the endpoint or vertex rows left out, add the rows that would imply a violated
+    /// one (`--sqp-implying-rows`).
+    pub sqp_implying_rows: bool,
 }
 
 impl Default for RunSettings {
@@ -169,6 +172,7 @@ impl Default for RunSettings {
             sqp_extend_rows: outer.sqp.extend_rows,
             sqp_drop_vertex_rows: outer.sqp.drop_vertex_rows,
             sqp_path_rows: outer.sqp.path_rows,
+            sqp_implying_rows: outer.sqp.implying_rows,
         }
     }
 }
@@ -305,6 +309,7 @@ impl RunSettings {
         settings.sqp.extend_rows = self.sqp_extend_rows;
         settings.sqp.drop_vertex_rows = self.sqp_drop_vertex_rows;
         settings.sqp.path_rows = self.sqp_path_rows;
+        settings.sqp.implying_rows = self.sqp_implying_rows;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

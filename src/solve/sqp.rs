@@ -151,6 +151,11 @@ pub struct SqpSettings {
     /// kernel of the continuous check); the rows carried from the start are kept
     /// (`--sqp-path-rows`).
     pub path_rows: bool,
+    /// With `drop_endpoint_rows` or `drop_vertex_rows`: where a row the QP's solution violates
+    /// would be left out if a row implying it were in the QP, add that row (an interior row,
+    /// or an extended one with `extend_rows`) in the lazy round ([`implying_pairs`]; 2D;
+    /// `--sqp-implying-rows`).
+    pub implying_rows: bool,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -224,6 +229,7 @@ impl Default for SqpSettings {
             extend_rows: false,
             drop_vertex_rows: false,
             path_rows: false,
+            implying_rows: false,
         }
     }
 }
@@ -664,6 +670,48 @@ fn implied_row(
     }
 }
 
+/// The pairs whose rows would imply `r` in [`implied_row`] (2D): with `endpoint`, vertex `x`
+/// against the other edges at the endpoint `v` where `x`'s row against edge `a` has its
+/// closest point; with `vertex`, `v` against the edges at `x`. Empty for a row whose closest
+/// point is inside its edge, and in 3D.
+fn implying_pairs(
+    mesh: &Mesh,
+    r: &PairRows,
+    endpoint: bool,
+    vertex: bool,
+    adj: &Adjacency,
+) -> Vec<ContactPair> {
+    const ZERO: f64 = 1e-12;
+    let ContactPair::PointEdge { x, a } = r.pair else {
+        return Vec::new();
+    };
+    let e = mesh.edges[a];
+    let v = if r.weight[1] <= ZERO {
+        e[0]
+    } else if r.weight[0] <= ZERO {
+        e[1]
+    } else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    if endpoint {
+        out.extend(
+            adj.vertex_edges[v]
+                .iter()
+                .filter(|&&b| b != a)
+                .map(|&b| ContactPair::PointEdge { x, a: b }),
+        );
+    }
+    if vertex {
+        out.extend(
+            adj.vertex_edges[x]
+                .iter()
+                .map(|&b| ContactPair::PointEdge { x: v, a: b }),
+        );
+    }
+    out
+}
+
 /// The row of a pair whose closest point on an element is on that element's boundary, taken
 /// against the element extended past that boundary: in 2D the line through the edge, between
 /// two edges of 3D curves the line–line distance (surfaces and faces keep their rows: `None`).
@@ -979,6 +1027,32 @@ pub(crate) fn sqp_step(
         let mut picked: Vec<PairRows> = pick.into_iter().map(|i| violated[i].0).collect();
         if let (Some(adj), true) = (&adjacency, endpoint || vertex) {
             // rows implied by the QP's rows or by this round's: left out, and not asked again
+            if ctx.sqp.implying_rows {
+                // a picked row that is not implied yet: the rows that would imply it, where
+                // they can (interior or extended), go in with it
+                let mut t = trusted(&mut rows.iter().chain(&picked));
+                let mut more: Vec<PairRows> = Vec::new();
+                for r in picked.iter() {
+                    if implied_row(mesh, r, &t, endpoint, vertex, adj) {
+                        continue;
+                    }
+                    for p in implying_pairs(mesh, r, endpoint, vertex, adj) {
+                        if carried.contains(&p) || t.contains(&p) {
+                            continue;
+                        }
+                        if let Some(ri) = pair_rows(mesh, x, p).map(extended) {
+                            if interior_row(&ri) || is_extended(&ri) {
+                                t.insert(ri.pair);
+                                more.push(ri);
+                            }
+                        }
+                    }
+                }
+                for ri in more {
+                    carried.insert(ri.pair);
+                    picked.push(ri);
+                }
+            }
             let t = trusted(&mut rows.iter().chain(&picked));
             picked.retain(|r| {
                 let implied = implied_row(mesh, r, &t, endpoint, vertex, adj);
@@ -1411,9 +1485,50 @@ mod tests {
         ));
     }
 
-    /// The extended rows, the vertex rows left out and the rows by the step's path keep every
-    /// iterate admissible and J monotone (checked in `sqp_run`) and end at the same energy as
-    /// with every row, to the margin, alone and with the endpoint rows left out.
+    /// The pairs that would imply a row at an endpoint: with `vertex`, the other body's vertex
+    /// against the edges at the first vertex; with `endpoint`, the vertex against the other
+    /// edges at that endpoint; none for a row whose closest point is inside its edge. Each one
+    /// put in the trusted set does imply the row.
+    #[test]
+    fn the_implying_pairs_are_the_ones_implied_row_asks_for() {
+        // lower: v0 (0, 0), v1 (1, 0), v2 (2, 0); upper: v3 (2.3, 0.2), v4 (3.3, 0.2)
+        let mesh = two_curves(2, vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 2.3, 0.2, 3.3, 0.2]);
+        let x = mesh.x_ref.clone();
+        let adj = Adjacency::new(&mesh);
+        // v3 against edge 1 (v1–v2): closest point v2
+        let at_v2 = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
+        assert_eq!(
+            implying_pairs(&mesh, &at_v2, false, true, &adj),
+            vec![ContactPair::PointEdge { x: 2, a: 2 }]
+        );
+        // v2 is the end of the lower curve: no other edge there
+        assert!(implying_pairs(&mesh, &at_v2, true, false, &adj).is_empty());
+        // v4 against edge 0 (v0–v1): closest point v1, the other edge at v1 is edge 1
+        let at_v1 = pair_rows(&mesh, &x, ContactPair::PointEdge { x: 4, a: 0 }).unwrap();
+        assert_eq!(at_v1.weight[1], 1.0, "closest point: v1");
+        let by_endpoint = implying_pairs(&mesh, &at_v1, true, false, &adj);
+        assert_eq!(by_endpoint, vec![ContactPair::PointEdge { x: 4, a: 1 }]);
+        let by_vertex = implying_pairs(&mesh, &at_v1, false, true, &adj);
+        assert_eq!(by_vertex, vec![ContactPair::PointEdge { x: 1, a: 2 }]);
+        for (p, endpoint, vertex) in [(by_endpoint[0], true, false), (by_vertex[0], false, true)] {
+            let t: PairSet = [p].into_iter().collect();
+            assert!(
+                implied_row(&mesh, &at_v1, &t, endpoint, vertex, &adj),
+                "{p:?}"
+            );
+        }
+        // a row with its closest point inside the edge has none: v3 at (1.5, 0.2) over edge 1
+        let over = two_curves(2, vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 1.5, 0.2, 2.5, 0.2]);
+        let inside = pair_rows(&over, &over.x_ref, ContactPair::PointEdge { x: 3, a: 1 }).unwrap();
+        assert!(inside.weight[..2].iter().all(|&w| w > 0.0));
+        let adj = Adjacency::new(&over);
+        assert!(implying_pairs(&over, &inside, true, true, &adj).is_empty());
+    }
+
+    /// The extended rows, the vertex rows left out, the rows by the step's path and the
+    /// implying rows keep every iterate admissible and J monotone (checked in `sqp_run`) and
+    /// end at the same energy as with every row, to the margin, alone and with the endpoint
+    /// rows left out.
     #[test]
     fn row_options_stay_admissible_and_reach_the_same_energy() {
         let (keep, _, _) = sqp_run(SqpSettings::default());
@@ -1441,6 +1556,14 @@ mod tests {
                 path_rows: true,
                 drop_endpoint_rows: true,
                 drop_vertex_rows: true,
+                ..SqpSettings::default()
+            },
+            SqpSettings {
+                path_rows: true,
+                extend_rows: true,
+                drop_endpoint_rows: true,
+                drop_vertex_rows: true,
+                implying_rows: true,
                 ..SqpSettings::default()
             },
         ] {

@@ -56,6 +56,9 @@ pub struct SolverSpec {
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (used with `outer_method = "sqp"`).
     pub sqp_path_rows: Option<bool>,
+    /// SQP, 2D: with the endpoint or vertex rows left out, add the rows that would imply a
+    /// violated one (used with `outer_method = "sqp"`).
+    pub sqp_implying_rows: Option<bool>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
