@@ -2,7 +2,8 @@
 //! the asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) at n = 40. Every iterate
 //! passes the exact ALL-PAIRS admissibility check ([`min_distance_brute_force`], not the
 //! broad phase the loop uses), J never increases, the status says what the certificate says,
-//! and the end state is lower than Pantz's fixed point from the same start.
+//! and the end state is lower than Pantz's fixed point from the same start. Also `rod` with
+//! the path rows (`--sqp-path-rows`) against every row, under the same checks.
 
 use contactlab::contact::min_distance_brute_force;
 use contactlab::scene::balloons::{build, BalloonsParams};
@@ -17,12 +18,22 @@ fn checked_run(n: usize, method: OuterMethod) -> (RunResult, Vec<IterationRecord
         ..Default::default()
     })
     .unwrap();
-    let (mesh, eps) = (&scene.mesh, scene.eps);
-    let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let settings = OuterSettings {
         method,
         ..Default::default()
     };
+    checked_run_of(&scene, &settings, &method.to_string())
+}
+
+/// A Clarabel run of `scene` with `settings`, every iterate checked by the all-pairs distance
+/// and J non-increasing (`label` names the run in the messages); the result and the records.
+fn checked_run_of(
+    scene: &contactlab::scene::Scene,
+    settings: &OuterSettings,
+    label: &str,
+) -> (RunResult, Vec<IterationRecord>) {
+    let (mesh, eps) = (&scene.mesh, scene.eps);
+    let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let mut records: Vec<IterationRecord> = Vec::new();
     let res = run(
         mesh,
@@ -30,12 +41,12 @@ fn checked_run(n: usize, method: OuterMethod) -> (RunResult, Vec<IterationRecord
         eps,
         &scene.x0,
         b.as_mut(),
-        &settings,
+        settings,
         &mut |r, x| {
             let d = min_distance_brute_force(mesh, x).distance;
             assert!(
                 d >= eps * (1.0 - 1e-12),
-                "{method}: iterate {} ({} step) at distance {d:e} < eps {eps:e}",
+                "{label}: iterate {} ({} step) at distance {d:e} < eps {eps:e}",
                 r.iteration,
                 r.step
             );
@@ -46,7 +57,7 @@ fn checked_run(n: usize, method: OuterMethod) -> (RunResult, Vec<IterationRecord
     for w in records.windows(2) {
         assert!(
             w[1].energy <= w[0].energy,
-            "{method}: J rose from {} to {} at iteration {} ({} step)",
+            "{label}: J rose from {} to {} at iteration {} ({} step)",
             w[0].energy,
             w[1].energy,
             w[1].iteration,
@@ -175,38 +186,13 @@ fn sqp_path_rows_keep_the_rod_admissible_and_reach_the_same_minimum_sooner() {
         ..Default::default()
     })
     .unwrap();
-    let (mesh, eps) = (&scene.mesh, scene.eps);
     let checked = |path_rows: bool| -> RunResult {
-        let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
         let mut settings = OuterSettings {
             method: OuterMethod::Sqp,
             ..Default::default()
         };
         settings.sqp.path_rows = path_rows;
-        let mut last = f64::INFINITY;
-        let res = run(
-            mesh,
-            &scene.energy,
-            eps,
-            &scene.x0,
-            b.as_mut(),
-            &settings,
-            &mut |r, x| {
-                let d = min_distance_brute_force(mesh, x).distance;
-                assert!(
-                    d >= eps * (1.0 - 1e-12),
-                    "path_rows {path_rows}: iterate {} at distance {d:e} < eps {eps:e}",
-                    r.iteration
-                );
-                assert!(
-                    r.energy <= last,
-                    "path_rows {path_rows}: J rose at {}",
-                    r.iteration
-                );
-                last = r.energy;
-            },
-        )
-        .unwrap();
+        let (res, _) = checked_run_of(&scene, &settings, &format!("path_rows {path_rows}"));
         assert_eq!(
             res.status,
             RunStatus::Converged,
