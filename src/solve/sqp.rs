@@ -1004,7 +1004,12 @@ pub(crate) fn sqp_step(
         }
         let tp = Instant::now();
         let full = add_free(x, &sol.x, col, 1.0);
-        let u: Vec<f64> = full.iter().zip(x).map(|(a, b)| a - b).collect();
+        // the step, for the path test of `path_rows`
+        let u: Vec<f64> = if ctx.sqp.path_rows {
+            full.iter().zip(x).map(|(a, b)| a - b).collect()
+        } else {
+            Vec::new()
+        };
         let violated: Vec<(PairRows, f64)> = search
             .candidates(mesh, x, &full, eps_qp)
             .into_iter()
