@@ -128,8 +128,8 @@ pub struct OuterSettings {
     /// Inner loop settings.
     pub inner: InnerSettings,
     /// Wall-time limit of the run in seconds (`None`: no limit). Checked before every outer
-    /// step and between inner steps; a QP in progress is not interrupted, so the run may
-    /// overshoot by one QP solve. On expiry the run stops with [`RunStatus::TimeLimit`] and
+    /// step and between inner steps; a QP in progress and the lazy rounds of its inner step
+    /// are not interrupted, so the run may overshoot by one inner step. On expiry the run stops with [`RunStatus::TimeLimit`] and
     /// returns its last accepted (admissible) iterate.
     pub time_limit_s: Option<f64>,
     /// After convergence, solve the last sub-problem again with its rows at ε itself (no

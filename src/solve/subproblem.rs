@@ -491,8 +491,8 @@ pub fn solve_subproblem(
     let mut warm: Option<WarmStart> = None;
     let mut shift = ModelShift::default();
     'inner: for _ in 0..settings.max_inner {
-        // Checked between inner steps (a QP in progress is not interrupted): the time limit
-        // overshoots by at most one QP solve and line search.
+        // Checked between inner steps (a QP in progress and its lazy rounds are not
+        // interrupted): the time limit overshoots by up to one inner step.
         if deadline.is_some_and(|d| Instant::now() >= d) {
             res.timed_out = true;
             break;
