@@ -128,9 +128,10 @@ pub struct OuterSettings {
     /// Inner loop settings.
     pub inner: InnerSettings,
     /// Wall-time limit of the run in seconds (`None`: no limit). Checked before every outer
-    /// step and between inner steps; a QP in progress and the lazy rounds of its inner step
-    /// are not interrupted, so the run may overshoot by one inner step. On expiry the run stops with [`RunStatus::TimeLimit`] and
-    /// returns its last accepted (admissible) iterate.
+    /// step, between inner steps and between lazy rounds; a QP in progress and a pair search
+    /// are not interrupted, so the run may overshoot by one QP solve and one pair search (an
+    /// SQP step, with its lazy rounds, is finished first). On expiry the run stops with
+    /// [`RunStatus::TimeLimit`] and returns its last accepted (admissible) iterate.
     pub time_limit_s: Option<f64>,
     /// After convergence, solve the last sub-problem again with its rows at ε itself (no
     /// margin δ), so that the reported state and energy are those of rows at ε, not ε + δ

@@ -491,8 +491,9 @@ pub fn solve_subproblem(
     let mut warm: Option<WarmStart> = None;
     let mut shift = ModelShift::default();
     'inner: for _ in 0..settings.max_inner {
-        // Checked between inner steps (a QP in progress and its lazy rounds are not
-        // interrupted): the time limit overshoots by up to one inner step.
+        // Checked between inner steps and between lazy rounds (a QP in progress and the
+        // oracle's search are not interrupted): the time limit overshoots by up to one QP solve
+        // and one pair search.
         if deadline.is_some_and(|d| Instant::now() >= d) {
             res.timed_out = true;
             break;
@@ -555,6 +556,12 @@ pub fn solve_subproblem(
                 let added = oracle(&full, &rows);
                 res.t_pairs_s += tp.elapsed().as_secs_f64();
                 if !added.is_empty() {
+                    if deadline.is_some_and(|d| Instant::now() >= d) {
+                        // The QP must be solved again before its step can be taken: stop at
+                        // the last accepted iterate `y` (in T(ψ)) instead.
+                        res.timed_out = true;
+                        break 'inner;
+                    }
                     // Keep this QP's duals for the carried rows; the new rows start at 0.
                     let old = row_offsets(&rows).1;
                     added_here.resize(rows.len() + added.len(), true);
@@ -696,6 +703,8 @@ pub fn solve_subproblem(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::Hessian;
+    use std::time::Duration;
 
     /// Upper triplets of the 1D Laplacian-like tridiagonal `a` on the diagonal, `b` off it.
     fn tridiagonal(n: usize, a: f64, b: f64) -> Vec<(usize, usize, f64)> {
@@ -707,6 +716,130 @@ mod tests {
             }
         }
         t
+    }
+
+    /// `½|x₀ − (0, −1)|²` for vertex 0: pulls it through the edge below it.
+    struct PullDown;
+
+    impl Objective for PullDown {
+        fn value(&self, x: &[f64]) -> f64 {
+            0.5 * (x[0] * x[0] + (x[1] + 1.0) * (x[1] + 1.0))
+        }
+        fn gradient(&self, x: &[f64]) -> Vec<f64> {
+            let mut g = vec![0.0; x.len()];
+            g[0] = x[0];
+            g[1] = x[1] + 1.0;
+            g
+        }
+        fn hessian(&self, _x: &[f64], _model: HessianModel) -> Hessian {
+            Hessian {
+                triplets: vec![(0, 0, 1.0), (1, 1, 1.0)],
+                rank_one: Vec::new(),
+            }
+        }
+        fn model_is_psd(&self, _model: HessianModel) -> bool {
+            true
+        }
+    }
+
+    /// A free vertex at (0, 1) above a fixed edge from (−1, 0) to (1, 0).
+    fn vertex_over_edge() -> Mesh {
+        use crate::scene::mesh::{Body, BodyKind};
+        Mesh {
+            dim: 2,
+            x_ref: vec![0.0, 1.0, -1.0, 0.0, 1.0, 0.0],
+            fixed: vec![false, true, true],
+            edges: vec![[1, 2]],
+            edge_body: vec![1],
+            bodies: vec![
+                Body {
+                    name: "point".into(),
+                    kind: BodyKind::Curve,
+                    vertices: vec![0],
+                    ..Default::default()
+                },
+                Body {
+                    name: "edge".into(),
+                    kind: BodyKind::Curve,
+                    vertices: vec![1, 2],
+                    edges: vec![0],
+                    ..Default::default()
+                },
+            ],
+            ..Default::default()
+        }
+    }
+
+    /// The lazy rows of the vertex over the edge from no rows: the first QP's step crosses the
+    /// edge, the oracle (after `wait`) adds the pair's row, the next QP stops at ε. Returns
+    /// the result and how often the oracle was asked.
+    fn lazy_vertex_over_edge(wait: Option<Duration>) -> (SubproblemResult, usize) {
+        let mesh = vertex_over_edge();
+        let dofs = DofMap::new(&mesh);
+        let x0 = mesh.x_ref.clone();
+        let pair = ContactPair::PointEdge { x: 0, a: 0 };
+        let row = crate::contact::pair_rows(&mesh, &x0, pair).unwrap();
+        let mut calls = 0;
+        let mut oracle = |phi: &[f64], carried: &[PairRows]| {
+            calls += 1;
+            if let Some(w) = wait {
+                std::thread::sleep(w);
+            }
+            let violated = phi[1] < 0.1 && carried.iter().all(|r| r.pair != pair);
+            if violated {
+                vec![row]
+            } else {
+                Vec::new()
+            }
+        };
+        let st = contactlab_solvers::QpSettings::default();
+        let mut backend = contactlab_solvers::backend_from_name("clarabel", &st).unwrap();
+        let deadline = wait.map(|w| Instant::now() + w / 2);
+        let res = solve_subproblem(
+            &mesh,
+            &PullDown,
+            &dofs,
+            Vec::new(),
+            &x0,
+            0.1,
+            None,
+            Some(&mut oracle as RowOracle),
+            None,
+            backend.as_mut(),
+            &InnerSettings::default(),
+            deadline,
+        )
+        .unwrap();
+        (res, calls)
+    }
+
+    #[test]
+    fn lazy_rows_stop_at_the_vertex_over_the_edge_at_eps() {
+        let (res, calls) = lazy_vertex_over_edge(None);
+        assert!(!res.timed_out);
+        assert_eq!(res.lazy_rounds, 1);
+        assert!(
+            calls >= 2,
+            "the oracle checks the re-solved QP too: {calls}"
+        );
+        assert!((res.y[1] - 0.1).abs() < 1e-5, "y = {:?}", &res.y[..2]);
+        assert!(
+            res.y[1] >= 0.1 && res.y[0].abs() < 1e-6,
+            "y = {:?}",
+            &res.y[..2]
+        );
+    }
+
+    #[test]
+    fn the_deadline_is_checked_between_lazy_rounds() {
+        // The deadline passes while the oracle searches after the first QP: the QP is not
+        // solved again, the sub-problem ends at its start (the last accepted iterate).
+        let (res, calls) = lazy_vertex_over_edge(Some(Duration::from_millis(40)));
+        assert!(res.timed_out);
+        assert_eq!(calls, 1);
+        assert_eq!((res.inner_iterations, res.lazy_rounds), (1, 0));
+        assert_eq!(&res.y[..2], &[0.0, 1.0]);
+        assert_eq!(res.multipliers.len(), res.rows.len());
     }
 
     #[test]
