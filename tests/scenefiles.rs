@@ -116,7 +116,7 @@ const CORPUS: &[(&str, &[&str])] = &[
             ":4:",
             "solver.newton_model",
             "\"exact\"",
-            "shifted, projected",
+            "shifted, shifted-tight, projected",
         ],
     ),
     (
@@ -538,6 +538,8 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted");
     assert_eq!(s["outer_method"], "pantz");
     assert_eq!(s["sqp_steps"], 0);
+    let s = summary(&["--newton-model", "shifted-tight"]);
+    assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted-tight");
 }
 
 #[test]

@@ -340,6 +340,11 @@ pub enum HessianModel {
     /// an inertia test (docs/method.md, "The Newton model"). The default.
     #[default]
     Shifted,
+    /// [`HessianModel::Shifted`] with the shift bisected: the grid's factor 4 between the
+    /// last shift that failed and the first that passed is narrowed to `4^(1/64)` by six more
+    /// factorizations, so that `σ` is within about 2% of the smallest that makes the model
+    /// definite (docs/method.md, "The Newton model").
+    ShiftedTight,
 }
 
 impl HessianModel {
@@ -349,6 +354,7 @@ impl HessianModel {
             HessianModel::Exact => "exact",
             HessianModel::Projected => "projected",
             HessianModel::Shifted => "shifted",
+            HessianModel::ShiftedTight => "shifted-tight",
         }
     }
 
@@ -358,9 +364,27 @@ impl HessianModel {
             HessianModel::Exact,
             HessianModel::Projected,
             HessianModel::Shifted,
+            HessianModel::ShiftedTight,
         ]
         .into_iter()
         .find(|m| m.as_str() == s)
+    }
+
+    /// Parses a model a user may choose (every one but [`HessianModel::Exact`]).
+    pub fn from_user_name(s: &str) -> Option<HessianModel> {
+        HessianModel::from_name(s).filter(|m| *m != HessianModel::Exact)
+    }
+
+    /// The names [`HessianModel::from_user_name`] accepts, for error messages.
+    pub const USER_NAMES: &'static str = "shifted, shifted-tight, projected";
+
+    /// Log-space bisections of the model's shift after the grid search (0: the grid's
+    /// factor 4).
+    pub fn shift_bisections(&self) -> usize {
+        match self {
+            HessianModel::ShiftedTight => 6,
+            _ => 0,
+        }
     }
 
     /// Whether `term`'s blocks are projected under this model.
@@ -368,7 +392,7 @@ impl HessianModel {
         match self {
             HessianModel::Exact => false,
             HessianModel::Projected => true,
-            HessianModel::Shifted => !term.exact_in_model(),
+            HessianModel::Shifted | HessianModel::ShiftedTight => !term.exact_in_model(),
         }
     }
 }

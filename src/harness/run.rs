@@ -85,8 +85,9 @@ pub struct RunArgs {
     #[arg(long)]
     pub no_warm_start: bool,
     /// Hessian of the inner steps' quadratic model: shifted (element terms projected, gas and
-    /// pressure exact, an adaptive shift; the default) or projected (every element block
-    /// projected, the previous model). docs/method.md, "The Newton model".
+    /// pressure exact, an adaptive shift; the default), shifted-tight (the same, its shift
+    /// bisected to within 2% of the smallest that makes the model definite) or projected
+    /// (every element block projected, the previous model). docs/method.md, "The Newton model".
     #[arg(long, default_value = "shifted", value_parser = parse_newton_model)]
     pub newton_model: HessianModel,
     /// The outer method: pantz (the paper's T(ψ) steps) or sqp (steps on the linearized true
@@ -207,12 +208,12 @@ fn parse_accuracy(s: &str) -> Result<Accuracy, String> {
 }
 
 fn parse_newton_model(s: &str) -> Result<HessianModel, String> {
-    match HessianModel::from_name(s) {
-        Some(m) if m != HessianModel::Exact => Ok(m),
-        _ => Err(format!(
-            "--newton-model {s:?}: expected one of shifted, projected"
-        )),
-    }
+    HessianModel::from_user_name(s).ok_or_else(|| {
+        format!(
+            "--newton-model {s:?}: expected one of {}",
+            HessianModel::USER_NAMES
+        )
+    })
 }
 
 fn parse_normal_stiffness(s: &str) -> Result<f64, String> {

@@ -41,14 +41,11 @@ impl RunRules for SolveRules {
             });
         }
         if let Some(m) = &s.newton_model {
-            if !matches!(
-                HessianModel::from_name(m),
-                Some(HessianModel::Shifted | HessianModel::Projected)
-            ) {
+            if HessianModel::from_user_name(m).is_none() {
                 return Err(Refusal {
                     key: "newton_model".into(),
                     value: format!("{m:?}"),
-                    reason: "expected one of shifted, projected".into(),
+                    reason: format!("expected one of {}", HessianModel::USER_NAMES),
                 });
             }
         }

@@ -449,13 +449,12 @@ impl BlockSettings {
         let time_limit_s = c.time_limit_s.or(defaults.time_limit_s);
         let newton_model = match c.newton_model.as_ref().or(defaults.newton_model.as_ref()) {
             None => None,
-            Some(m) => Some(
-                HessianModel::from_name(m)
-                    .filter(|m| *m != HessianModel::Exact)
-                    .with_context(|| {
-                        format!("{at}: newton_model {m:?}: expected shifted or projected")
-                    })?,
-            ),
+            Some(m) => Some(HessianModel::from_user_name(m).with_context(|| {
+                format!(
+                    "{at}: newton_model {m:?}: expected one of {}",
+                    HessianModel::USER_NAMES
+                )
+            })?),
         };
         let outer_method = match c.outer_method.as_ref().or(defaults.outer_method.as_ref()) {
             None => OuterMethod::default(),

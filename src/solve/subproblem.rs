@@ -109,6 +109,11 @@ impl Default for InnerSettings {
 /// `max(1e-6·c, c − σ/‖w‖²)`, so that along `w` (the direction of the negative mode of a gas
 /// term's `−C/V ∇²V`) the model is exact again where the floor does not bind: the
 /// model is then `∇²J + σ(I − Σ ŵŵᵀ)` when the `w` have disjoint supports.
+///
+/// The grid leaves `σ` up to 4 times the smallest shift that makes the model definite, and
+/// `σI` stiffens every direction, the soft ones too. [`HessianModel::ShiftedTight`] bisects
+/// `σ` in log space between the grid point that failed and the one that passed
+/// ([`HessianModel::shift_bisections`] more factorizations), to within a factor `4^(1/64)`.
 #[derive(Clone, Debug, Default)]
 pub struct ModelShift {
     /// The last shift chosen.
@@ -124,7 +129,13 @@ impl ModelShift {
     /// Chooses the shift for `p` (upper CSC; its leading `nf × nf` block is `H + ρI`, every
     /// diagonal entry present, and no entry couples it to the columns after it) and adds it to
     /// that block's diagonal in place.
-    fn apply(&mut self, p: &mut CscMatrix, nf: usize, maxdiag: f64) -> Result<f64, QpError> {
+    fn apply(
+        &mut self,
+        p: &mut CscMatrix,
+        nf: usize,
+        maxdiag: f64,
+        bisections: usize,
+    ) -> Result<f64, QpError> {
         let end = p.colptr[nf];
         let mut m = CscMatrix {
             nrows: nf,
@@ -156,12 +167,36 @@ impl ModelShift {
         if sigma < floor {
             sigma = 0.0;
         }
+        // the last shift that failed (None: none failed yet)
+        let mut failed: Option<f64> = None;
         for _ in 0..80 {
             for (k, &p) in diag.iter().enumerate() {
                 m.nzval[p] = base[k] + sigma;
             }
             self.factorizations += 1;
             if SparseLdl::numeric(&m, sym).is_some() {
+                if sigma > 0.0 && bisections > 0 {
+                    // between the last failure (or σ/4 where the search started at σ) and σ
+                    let (mut lo, mut hi) = (failed.unwrap_or(sigma / 4.0), sigma);
+                    if lo > 0.0 {
+                        for _ in 0..bisections {
+                            let mid = (lo * hi).sqrt();
+                            for (k, &p) in diag.iter().enumerate() {
+                                m.nzval[p] = base[k] + mid;
+                            }
+                            self.factorizations += 1;
+                            if SparseLdl::numeric(&m, sym).is_some() {
+                                hi = mid;
+                            } else {
+                                lo = mid;
+                            }
+                        }
+                    }
+                    sigma = hi;
+                    for (k, &p) in diag.iter().enumerate() {
+                        m.nzval[p] = base[k] + sigma;
+                    }
+                }
                 self.sigma = sigma;
                 self.max_sigma = self.max_sigma.max(sigma);
                 if sigma > 0.0 {
@@ -171,6 +206,7 @@ impl ModelShift {
                 }
                 return Ok(sigma);
             }
+            failed = Some(sigma);
             sigma = if sigma == 0.0 { floor } else { 4.0 * sigma };
         }
         Err(QpError::NotFinite {
@@ -353,7 +389,12 @@ pub fn build_qp_with(
     }
     let mut p = CscMatrix::from_triplets(n, n, &ptrip)?;
     if indefinite || !energy.model_is_psd(settings.hessian_model) {
-        let sigma = shift.apply(&mut p, nf, maxdiag)?;
+        let sigma = shift.apply(
+            &mut p,
+            nf,
+            maxdiag,
+            settings.hessian_model.shift_bisections(),
+        )?;
         if sigma > 0.0 {
             for (k, r) in h.rank_one.iter().enumerate() {
                 let ww: f64 =
@@ -848,9 +889,38 @@ mod tests {
         let mut m = CscMatrix::from_triplets(10, 10, &tridiagonal(10, 2.0, -1.0)).unwrap();
         let before = m.nzval.clone();
         let mut shift = ModelShift::default();
-        assert_eq!(shift.apply(&mut m, 10, 2.0).unwrap(), 0.0);
+        assert_eq!(shift.apply(&mut m, 10, 2.0, 0).unwrap(), 0.0);
         assert_eq!(m.nzval, before);
         assert_eq!(shift.factorizations, 1);
+    }
+
+    #[test]
+    fn the_tight_shift_is_within_a_factor_4_to_the_64th_of_the_smallest() {
+        // the same model as below: λ_min = 1 − 2cos(π/11) ≈ −0.919
+        let n = 10;
+        let t = CscMatrix::from_triplets(n, n, &tridiagonal(n, 1.0, -1.0)).unwrap();
+        let lambda_min = 1.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
+        let bisections = HessianModel::ShiftedTight.shift_bisections();
+        assert_eq!(bisections, 6);
+        let mut grid = ModelShift::default();
+        let coarse = grid.apply(&mut t.clone(), n, 1.0, 0).unwrap();
+        let mut shift = ModelShift::default();
+        let sigma = shift.apply(&mut t.clone(), n, 1.0, bisections).unwrap();
+        assert!(sigma > -lambda_min, "σ = {sigma}, λ_min = {lambda_min}");
+        let bound = 4f64.powf(1.0 / 64.0) * -lambda_min;
+        assert!(sigma <= bound, "σ = {sigma} above {bound}");
+        assert!(sigma < coarse, "σ = {sigma}, the grid's {coarse}");
+        assert_eq!(shift.factorizations, grid.factorizations + bisections);
+        // from the next step's start σ/4 (which fails) it bisects again to a σ as tight
+        let again = shift.apply(&mut t.clone(), n, 1.0, bisections).unwrap();
+        assert!(again > -lambda_min && again <= bound, "σ = {again}");
+        // a definite model is not shifted
+        let pd = CscMatrix::from_triplets(n, n, &tridiagonal(n, 3.0, -1.0)).unwrap();
+        let mut fresh = ModelShift::default();
+        assert_eq!(
+            fresh.apply(&mut pd.clone(), n, 3.0, bisections).unwrap(),
+            0.0
+        );
     }
 
     #[test]
@@ -862,7 +932,7 @@ mod tests {
         let lambda_min = 1.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
         let mut shift = ModelShift::default();
         let mut m = t.clone();
-        let sigma = shift.apply(&mut m, n, 1.0).unwrap();
+        let sigma = shift.apply(&mut m, n, 1.0, 0).unwrap();
         assert!(
             sigma > -lambda_min,
             "σ = {sigma} does not cover λ_min = {lambda_min}"
@@ -879,12 +949,12 @@ mod tests {
             }
         }
         // the next step starts from σ/4, which fails, and climbs back to the same σ
-        let again = shift.apply(&mut t.clone(), n, 1.0).unwrap();
+        let again = shift.apply(&mut t.clone(), n, 1.0, 0).unwrap();
         assert_eq!(again, sigma);
         // a model that became definite brings the shift back to 0 within a few steps
         let pd = CscMatrix::from_triplets(n, n, &tridiagonal(n, 3.0, -1.0)).unwrap();
         let mut steps = 0;
-        while shift.apply(&mut pd.clone(), n, 3.0).unwrap() > 0.0 {
+        while shift.apply(&mut pd.clone(), n, 3.0, 0).unwrap() > 0.0 {
             steps += 1;
             assert!(steps < 40, "the shift does not fall back to 0");
         }
