@@ -128,9 +128,9 @@ pub struct OuterSettings {
     /// Inner loop settings.
     pub inner: InnerSettings,
     /// Wall-time limit of the run in seconds (`None`: no limit). Checked before every outer
-    /// step, between inner steps and between lazy rounds; a QP in progress and a pair search
-    /// are not interrupted, so the run may overshoot by one QP solve and one pair search (an
-    /// SQP step, with its lazy rounds, is finished first). On expiry the run stops with
+    /// step, between inner steps and between lazy rounds (of both methods); a QP in progress,
+    /// a pair search and an SQP step's line search are not interrupted, so the run may
+    /// overshoot by one QP solve and one pair search, or one SQP line search. On expiry the run stops with
     /// [`RunStatus::TimeLimit`] and returns its last accepted (admissible) iterate.
     pub time_limit_s: Option<f64>,
     /// After convergence, solve the last sub-problem again with its rows at ε itself (no
@@ -682,6 +682,7 @@ impl StepContext<'_> {
             sqp: &settings.sqp,
             roundoff: self.roundoff,
             start_radius: d_prev.min(settings.lazy_start * self.hbar),
+            deadline: self.deadline,
         };
         let warm_mu: HashMap<ContactPair, f64> =
             warm.iter().map(|(p, m)| (*p, m.iter().sum())).collect();
@@ -966,6 +967,11 @@ fn outer_loop(
             OuterMethod::Sqp => {
                 let (step, attempt) =
                     ctx.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
+                if attempt.timed_out {
+                    // stopped between lazy rounds: x is the last accepted iterate
+                    result.status = RunStatus::TimeLimit;
+                    break;
+                }
                 // A step that a safeguard cut and that moved J by less than the stopping
                 // rule's tolerance is no evidence of a fixed point: take Pantz's step.
                 let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());

@@ -247,6 +247,8 @@ pub(crate) struct SqpContext<'a> {
     pub roundoff: f64,
     /// The first working set's radius beyond `ε + δ`.
     pub start_radius: f64,
+    /// The run's time limit: checked between the lazy rounds of the step's QP.
+    pub deadline: Option<Instant>,
 }
 
 /// The outcome of one SQP step.
@@ -279,6 +281,9 @@ pub(crate) struct SqpStep {
     pub t_pairs_s: f64,
     pub t_assembly_s: f64,
     pub t_solve_s: f64,
+    /// The deadline passed between two lazy rounds: the step stopped before its QP was solved
+    /// over every row it violates, and nothing was accepted.
+    pub timed_out: bool,
 }
 
 impl SqpStep {
@@ -299,6 +304,7 @@ impl SqpStep {
             t_pairs_s: 0.0,
             t_assembly_s: 0.0,
             t_solve_s: 0.0,
+            timed_out: false,
         }
     }
 }
@@ -1070,6 +1076,12 @@ pub(crate) fn sqp_step(
                 break (qp, sol);
             }
         }
+        if ctx.deadline.is_some_and(|d| Instant::now() >= d) {
+            // The QP must be solved again before its step can be taken: stop at x.
+            out.timed_out = true;
+            out.rows = rows;
+            return Ok(out);
+        }
         let nold = rows.len();
         for r in picked {
             carried.insert(r.pair);
@@ -1284,6 +1296,56 @@ mod tests {
         }
         assert_eq!(res.sqp_steps + res.fallback_steps, res.outer_iterations);
         (records, res.status, res.certificate.kappa)
+    }
+
+    /// The second SQP step of the asymmetric balloons (n = 8), whose first QP violates rows it
+    /// does not carry (a lazy round), with and without a deadline that has passed when the
+    /// round would begin: with it, nothing is accepted and the step says so.
+    #[test]
+    fn the_deadline_is_checked_between_the_sqp_steps_lazy_rounds() {
+        let scene = build(&BalloonsParams {
+            n: 8,
+            heights: [0.9, 0.2, 0.9, 0.2],
+            ..Default::default()
+        })
+        .unwrap();
+        let (mesh, x0) = (&scene.mesh, &scene.x0);
+        let dofs = DofMap::new(mesh);
+        let inner = InnerSettings::default();
+        let sqp = SqpSettings::default();
+        let step = |x: &[f64], deadline: Option<Instant>| -> SqpStep {
+            let ctx = SqpContext {
+                mesh,
+                energy: &scene.energy,
+                eps: scene.eps,
+                dofs: &dofs,
+                inner: &inner,
+                sqp: &sqp,
+                roundoff: crate::solve::outer::roundoff_allowance(x),
+                start_radius: 0.0,
+                deadline,
+            };
+            let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
+            sqp_step(
+                &ctx,
+                x,
+                scene.energy.value(x),
+                &HashMap::new(),
+                &mut ModelShift::default(),
+                b.as_mut(),
+            )
+            .unwrap()
+        };
+        let first = step(x0, None);
+        let x1 = first.accepted.expect("the first step is taken").0;
+        let free = step(&x1, None);
+        assert!(free.lazy_rounds > 0, "no lazy round to interrupt");
+        assert!(free.accepted.is_some() && !free.timed_out);
+        // a deadline of now has passed by the time the first QP is solved and checked
+        let cut = step(&x1, Some(Instant::now()));
+        assert!(cut.timed_out);
+        assert!(cut.accepted.is_none() && !cut.stationary);
+        assert_eq!(cut.lazy_rounds, 0);
     }
 
     /// Two curves of `dim`-dimensional points `x_ref`: `lower` through vertices 0, 1, 2 (edges
