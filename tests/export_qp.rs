@@ -49,6 +49,7 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         sqp_drop_vertex_rows: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
+        sqp_extrapolate: 0,
         time_limit_s: None,
     };
     let mut inner = backend_from_name("clarabel", &acc.qp_settings("clarabel")).unwrap();

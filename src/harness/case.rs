@@ -58,6 +58,8 @@ pub struct CaseSettings {
     pub sqp_path_rows: bool,
     /// SQP: add the rows that would imply a violated endpoint or vertex row.
     pub sqp_implying_rows: bool,
+    /// SQP: extrapolations of a full step (2, 4, …, 2^k times it; 0: none).
+    pub sqp_extrapolate: usize,
 }
 
 /// A finished case.
@@ -152,6 +154,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.drop_vertex_rows = cs.sqp_drop_vertex_rows;
     settings.sqp.path_rows = cs.sqp_path_rows;
     settings.sqp.implying_rows = cs.sqp_implying_rows;
+    settings.sqp.extrapolate = cs.sqp_extrapolate;
     settings
 }
 

@@ -182,6 +182,7 @@ fn run_prepared(
         sqp_drop_vertex_rows: rs.sqp_drop_vertex_rows,
         sqp_path_rows: rs.sqp_path_rows,
         sqp_implying_rows: rs.sqp_implying_rows,
+        sqp_extrapolate: rs.sqp_extrapolate,
     };
     let qps = rs.qp_settings();
     let out = a

@@ -78,6 +78,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_drop_vertex_rows: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
+        sqp_extrapolate: 0,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

@@ -142,6 +142,11 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_implying_rows: bool,
+    /// SQP: after a full step is accepted, try 2, 4, …, 2^K times it while each trial passes
+    /// every test of the line search and lowers J further; the last accepted is kept
+    /// (docs/method.md, "Extrapolating a full step"; 0: off).
+    #[arg(long, default_value_t = 0)]
+    pub sqp_extrapolate: usize,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -394,6 +399,7 @@ fn scene_from_file(
     from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
     from_file!("sqp_path_rows", sqp_path_rows);
     from_file!("sqp_implying_rows", sqp_implying_rows);
+    from_file!("sqp_extrapolate", sqp_extrapolate);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -427,6 +433,7 @@ impl RunArgs {
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
+            sqp_extrapolate: self.sqp_extrapolate,
         }
     }
 }
@@ -467,6 +474,11 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_implying_rows,
                 String::new(),
             ),
+            (
+                "--sqp-extrapolate",
+                settings.sqp_extrapolate != 0,
+                settings.sqp_extrapolate.to_string(),
+            ),
         ]
         .into_iter()
         .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
@@ -475,8 +487,8 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
-                 --sqp-drop-vertex-rows, --sqp-path-rows, --sqp-implying-rows, or the same keys \
-                 with underscores in a scene file's [solver]) apply to --outer-method sqp only",
+                 --sqp-drop-vertex-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
+                 or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );

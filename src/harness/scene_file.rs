@@ -172,6 +172,9 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_implying_rows {
         s.sqp_implying_rows = v;
     }
+    if let Some(v) = spec.sqp_extrapolate {
+        s.sqp_extrapolate = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }

@@ -213,6 +213,9 @@ pub struct Common {
     /// SQP, 2D: with the endpoint or vertex rows left out, add the rows that would imply a
     /// violated one (default false; with `outer_method = "sqp"` and one of those only).
     pub sqp_implying_rows: Option<bool>,
+    /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check passes
+    /// (default 0: off; with `outer_method = "sqp"` only).
+    pub sqp_extrapolate: Option<usize>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -417,6 +420,7 @@ struct BlockSettings {
     sqp_drop_vertex_rows: bool,
     sqp_path_rows: bool,
     sqp_implying_rows: bool,
+    sqp_extrapolate: usize,
     reference: Option<ReferenceSpec>,
 }
 
@@ -495,6 +499,10 @@ impl BlockSettings {
             .sqp_implying_rows
             .or(defaults.sqp_implying_rows)
             .unwrap_or(false);
+        let sqp_extrapolate = c
+            .sqp_extrapolate
+            .or(defaults.sqp_extrapolate)
+            .unwrap_or(0);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -534,6 +542,7 @@ impl BlockSettings {
                 ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
                 ("sqp_path_rows", sqp_path_rows),
                 ("sqp_implying_rows", sqp_implying_rows),
+                ("sqp_extrapolate", sqp_extrapolate != 0),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
@@ -542,8 +551,8 @@ impl BlockSettings {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
-                     sqp_drop_vertex_rows, sqp_path_rows and sqp_implying_rows apply to \
-                     outer_method = \"sqp\" only",
+                     sqp_drop_vertex_rows, sqp_path_rows, sqp_implying_rows and \
+                     sqp_extrapolate apply to outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
@@ -601,6 +610,7 @@ impl BlockSettings {
             sqp_drop_vertex_rows,
             sqp_path_rows,
             sqp_implying_rows,
+            sqp_extrapolate,
             reference,
         })
     }
@@ -635,6 +645,7 @@ impl BlockSettings {
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
+            sqp_extrapolate: self.sqp_extrapolate,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -657,12 +668,12 @@ impl BlockSettings {
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
 /// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
-/// endpoint rows, extended rows, dropped vertex rows, path rows, implying rows) only when set, so that the keys of
+/// endpoint rows, extended rows, dropped vertex rows, path rows, implying rows, extrapolation) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -718,6 +729,11 @@ fn run_key(spec: &RunSpec) -> String {
             "|implying-rows"
         } else {
             ""
+        },
+        if s.sqp_extrapolate == 0 {
+            String::new()
+        } else {
+            format!("|extrapolate={}", s.sqp_extrapolate)
         }
     )
 }
@@ -969,6 +985,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_drop_vertex_rows: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
+        sqp_extrapolate: 0,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,

@@ -147,6 +147,9 @@ pub struct RunSettings {
     /// SQP: with the endpoint or vertex rows left out, add the rows that would imply a violated
     /// one (`--sqp-implying-rows`).
     pub sqp_implying_rows: bool,
+    /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check
+    /// passes (`--sqp-extrapolate k`; 0: off).
+    pub sqp_extrapolate: usize,
 }
 
 impl Default for RunSettings {
@@ -173,6 +176,7 @@ impl Default for RunSettings {
             sqp_drop_vertex_rows: outer.sqp.drop_vertex_rows,
             sqp_path_rows: outer.sqp.path_rows,
             sqp_implying_rows: outer.sqp.implying_rows,
+            sqp_extrapolate: outer.sqp.extrapolate,
         }
     }
 }
@@ -310,6 +314,7 @@ impl RunSettings {
         settings.sqp.drop_vertex_rows = self.sqp_drop_vertex_rows;
         settings.sqp.path_rows = self.sqp_path_rows;
         settings.sqp.implying_rows = self.sqp_implying_rows;
+        settings.sqp.extrapolate = self.sqp_extrapolate;
         settings.time_limit_s = self.time_limit_s;
         settings
     }

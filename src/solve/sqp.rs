@@ -156,6 +156,10 @@ pub struct SqpSettings {
     /// or an extended one with `extend_rows`) in the lazy round ([`implying_pairs`]; 2D;
     /// `--sqp-implying-rows`).
     pub implying_rows: bool,
+    /// After a full step is accepted, try 2, 4, …, 2^k times the step while each trial passes
+    /// every test of the line search and lowers J below the last accepted one; keep the last
+    /// accepted (`--sqp-extrapolate k`; 0: off).
+    pub extrapolate: usize,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -230,6 +234,7 @@ impl Default for SqpSettings {
             drop_vertex_rows: false,
             path_rows: false,
             implying_rows: false,
+            extrapolate: 0,
         }
     }
 }
@@ -910,6 +915,17 @@ fn extended_row(mesh: &Mesh, x: &[f64], r: &PairRows, adj: &Adjacency) -> Option
     }
 }
 
+/// The outcome of one trial point of the line search.
+enum Trial {
+    /// Passed every test: the corrected point, its energy and exact minimum distance.
+    Accepted(Vec<f64>, f64, MinDistance),
+    /// A safeguard cut it: a pair crossed, a correction failed, or the exact or the continuous
+    /// check rejected it.
+    Safeguard,
+    /// Not enough decrease of J (or J not finite).
+    NoDecrease,
+}
+
 /// One SQP step from the admissible `x` (J(x) = `jx`): the QP on the linearized rows, then the
 /// line search with its correction and checks (module documentation). `warm`: the last
 /// multiplier of each pair; `shift`: the Newton model's shift, kept from step to step.
@@ -1134,10 +1150,10 @@ pub(crate) fn sqp_step(
     let metric = diagonal_metric(&base.p)?;
     // The line search: correction, sufficient decrease, exact check, continuous check.
     let eta = ctx.sqp.ccd_thickness * eps;
-    let mut t = 1.0f64;
-    for _ in 0..=ctx.sqp.max_halvings {
+    // One trial point z = x + t s, corrected, against the best energy so far (`j_best`:
+    // none while halving; the last accepted point's J while extrapolating).
+    let mut trial = |t: f64, j_best: f64, out: &mut SqpStep| -> Result<Trial, QpError> {
         let mut z = add_free(x, s, col, t);
-        let mut ok = true;
         for round in 0..=ctx.sqp.corrections {
             let tp = Instant::now();
             let mut fix: Vec<PairRows> = Vec::new();
@@ -1163,8 +1179,7 @@ pub(crate) fn sqp_step(
             }
             out.t_pairs_s += tp.elapsed().as_secs_f64();
             if crossed {
-                ok = false;
-                break;
+                return Ok(Trial::Safeguard);
             }
             if !close || round == ctx.sqp.corrections {
                 break;
@@ -1193,20 +1208,13 @@ pub(crate) fn sqp_step(
             out.backend_iterations += c.iterations;
             out.corrections += 1;
             if c.status != QpStatus::Solved {
-                ok = false;
-                break;
+                return Ok(Trial::Safeguard);
             }
             z = add_free(&z, &c.x, col, 1.0);
         }
-        if !ok {
-            out.limited = true;
-            t *= 0.5;
-            continue;
-        }
         let jz = ctx.energy.value(&z);
-        if !(jz.is_finite() && jz <= jx + 1e-4 * t * slope) {
-            t *= 0.5;
-            continue;
+        if !(jz.is_finite() && jz <= jx + 1e-4 * t * slope && jz < j_best) {
+            return Ok(Trial::NoDecrease);
         }
         let tp = Instant::now();
         let md = min_distance(mesh, &z, 2.0 * eps, true);
@@ -1216,13 +1224,39 @@ pub(crate) fn sqp_step(
         out.t_pairs_s += tp.elapsed().as_secs_f64();
         if !admissible || tunnels {
             out.rejections += 1;
-            out.limited = true;
-            t *= 0.5;
-            continue;
+            return Ok(Trial::Safeguard);
         }
-        out.step_length = t;
-        out.accepted = Some((z, jz, md));
-        break;
+        Ok(Trial::Accepted(z, jz, md))
+    };
+    let mut t = 1.0f64;
+    for _ in 0..=ctx.sqp.max_halvings {
+        match trial(t, f64::INFINITY, &mut out)? {
+            Trial::Accepted(z, jz, md) => {
+                out.step_length = t;
+                out.accepted = Some((z, jz, md));
+                break;
+            }
+            Trial::Safeguard => out.limited = true,
+            Trial::NoDecrease => {}
+        }
+        t *= 0.5;
+    }
+    // Extrapolation (`SqpSettings::extrapolate`): after a full step, 2, 4, … times the step
+    // while each is accepted and lowers J below the last accepted point; the last accepted
+    // is kept. A trial that fails here does not mark the step `limited`: the full step was
+    // taken.
+    if out.step_length == 1.0 {
+        for k in 1..=ctx.sqp.extrapolate.min(60) {
+            let t = (1u64 << k) as f64;
+            let j_best = out.accepted.as_ref().map_or(jx, |a| a.1);
+            match trial(t, j_best, &mut out)? {
+                Trial::Accepted(z, jz, md) => {
+                    out.step_length = t;
+                    out.accepted = Some((z, jz, md));
+                }
+                _ => break,
+            }
+        }
     }
     out.rows = rows;
     Ok(out)

@@ -59,6 +59,9 @@ pub struct SolverSpec {
     /// SQP, 2D: with the endpoint or vertex rows left out, add the rows that would imply a
     /// violated one (used with `outer_method = "sqp"`).
     pub sqp_implying_rows: Option<bool>,
+    /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check passes
+    /// (used with `outer_method = "sqp"`; 0: off).
+    pub sqp_extrapolate: Option<usize>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
