@@ -552,7 +552,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
                   sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\
                   sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\
-                  sqp_path_rows = true\nsqp_implying_rows = true\n\n";
+                  sqp_path_rows = true\nsqp_implying_rows = true\n\
+                  sqp_extrapolate = 2\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
         let src = std::fs::read_to_string(
             Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -604,6 +605,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             s["settings"]["sqp"]["drop_vertex_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["path_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["implying_rows"].as_bool().unwrap(),
+            s["settings"]["sqp"]["extrapolate"].as_u64().unwrap(),
         )
     };
     for (name, dynamic) in [
@@ -613,7 +615,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // the file's values
         assert_eq!(
             sqp(&summary(name, dynamic)),
-            ("psd".into(), 0.01, true, true, true, true, true),
+            ("psd".into(), 0.01, true, true, true, true, true, 2),
             "{name}"
         );
         // a flag given on the command line wins, even at its default value; the other key
@@ -621,7 +623,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("off".into(), 0.01, true, true, true, true, true),
+            ("off".into(), 0.01, true, true, true, true, true, 2),
             "{name}"
         );
         let flags = [
@@ -637,12 +639,14 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "false",
                 "--sqp-path-rows",
                 "false",
+                "--sqp-extrapolate",
+                "3",
             ],
         ]
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0, false, false, true, false, true),
+            ("tangent".into(), 0.0, false, false, true, false, true, 3),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -664,7 +668,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &[
                 "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
                  --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows and \
-                 --sqp-path-rows and --sqp-implying-rows",
+                 --sqp-path-rows and --sqp-implying-rows and --sqp-extrapolate 2",
                 "pantz",
             ],
         );
@@ -674,7 +678,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &[
                 "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows and \
                  --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-path-rows and \
-                 --sqp-implying-rows",
+                 --sqp-implying-rows and --sqp-extrapolate 2",
                 "pantz",
             ],
         );
@@ -695,6 +699,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "false",
                 "--sqp-implying-rows",
                 "false",
+                "--sqp-extrapolate",
+                "0",
             ],
         ]
         .concat();
@@ -730,6 +736,11 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-path-rows"][..],
             "refused_ring_path",
             "--sqp-path-rows set with the pantz outer method",
+        ),
+        (
+            &["--sqp-extrapolate", "3"][..],
+            "refused_ring_extrapolate",
+            "--sqp-extrapolate 3 set with the pantz outer method",
         ),
         (
             &["--outer-method", "sqp", "--sqp-implying-rows"][..],

@@ -499,10 +499,7 @@ impl BlockSettings {
             .sqp_implying_rows
             .or(defaults.sqp_implying_rows)
             .unwrap_or(false);
-        let sqp_extrapolate = c
-            .sqp_extrapolate
-            .or(defaults.sqp_extrapolate)
-            .unwrap_or(0);
+        let sqp_extrapolate = c.sqp_extrapolate.or(defaults.sqp_extrapolate).unwrap_or(0);
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -1358,6 +1355,21 @@ mod tests {
         let err = ring("sqp_path_rows = true").err().unwrap().to_string();
         assert!(
             err.contains("sqp_path_rows set with outer_method = \"pantz\""),
+            "{err}"
+        );
+        // the extrapolation: in the outer settings and the key (after the row options)
+        let runs =
+            ring("outer_method = \"sqp\"\nsqp_path_rows = true\nsqp_extrapolate = 3").unwrap();
+        assert_eq!(case::outer_settings(&runs[0].settings).sqp.extrapolate, 3);
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|path-rows|extrapolate=3")
+        );
+        let runs = ring("outer_method = \"sqp\"\nsqp_extrapolate = 0").unwrap();
+        assert_eq!(runs[0].key, format!("{plain}|method=sqp"));
+        let err = ring("sqp_extrapolate = 2").err().unwrap().to_string();
+        assert!(
+            err.contains("sqp_extrapolate set with outer_method = \"pantz\""),
             "{err}"
         );
         // a block overrides the defaults, key by key

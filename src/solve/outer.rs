@@ -245,7 +245,8 @@ pub struct IterationRecord {
     /// `fallback` (the SQP step collapsed and Pantz's step was taken; its counts include the
     /// SQP attempt's), `none` (iteration 0).
     pub step: &'static str,
-    /// The SQP step's length `t` (NaN for a T(ψ) step).
+    /// The SQP step's length `t` (NaN for a T(ψ) step; above 1 where the step was
+    /// extrapolated, `SqpSettings::extrapolate`).
     pub step_length: f64,
     /// The SQP step's second-order correction QPs.
     pub corrections: usize,

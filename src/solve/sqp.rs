@@ -41,7 +41,10 @@
 //!    - **acceptance**: `J(z) ≤ J(x) + c₁ t g·s`, the exact admissibility check at z
 //!      (`min_distance ≥ ε` up to round-off, as every iterate), and the continuous check of the
 //!      straight motion x → z ([`crate::contact::continuous`]): no pair comes closer than
-//!      `η = ccd_thickness·ε` on the way, so nothing passes through anything.
+//!      `η = ccd_thickness·ε` on the way, so nothing passes through anything;
+//!    - **extrapolation** (opt-in, [`SqpSettings::extrapolate`]): after the full step t = 1 is
+//!      accepted, t = 2, 4, … are tried while each trial passes the same tests and lowers J
+//!      below the last accepted one.
 //! 3. **Stationary**: the QP step has a non-negative slope, so x is a KKT point of the
 //!    linearized problem, which has the true distances' gradients: (9) of (3) (Lemma 5.1,
 //!    Lemma 5.3) at the level `ε + δ` (a pair closer than that has its row at its own
