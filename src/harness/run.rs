@@ -583,8 +583,13 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
                 }
                 params.heights.copy_from_slice(hs);
             }
-            if !a.params.is_empty() {
-                bail!("--param is for the ring and the 3D scenes; the balloons take --c, --mu, --perturb, --heights");
+            for (k, v) in registry::parse_params(&a.params)? {
+                match k.as_str() {
+                    "n_ratio" => params.n_ratio = v,
+                    other => bail!(
+                        "--param {other}: the balloons take --param n_ratio=R only (and --c, --mu, --perturb, --heights)"
+                    ),
+                }
             }
             (balloons::build(&params)?, serde_json::to_value(&params)?)
         }

@@ -33,6 +33,10 @@ pub struct BalloonsParams {
     pub perturb: [f64; 4],
     /// Initial parabola height of each balloon.
     pub heights: [f64; 4],
+    /// Balloons 1 and 3 (right and left) have `round(n_ratio · n)` elements where balloons 0
+    /// and 2 have `n` (≥ 1; 1: the same mesh everywhere). Bodies of different mesh sizes, whose
+    /// contacting vertices do not face each other.
+    pub n_ratio: f64,
 }
 
 impl Default for BalloonsParams {
@@ -44,6 +48,7 @@ impl Default for BalloonsParams {
             eps: None,
             perturb: [0.0; 4],
             heights: [0.2; 4],
+            n_ratio: 1.0,
         }
     }
 }
@@ -102,6 +107,9 @@ impl BalloonsParams {
                     "must be finite and > -1",
                 );
             }
+        }
+        if !(self.n_ratio.is_finite() && self.n_ratio >= 1.0 && self.n_ratio <= 100.0) {
+            return bad("n_ratio", self.n_ratio.to_string(), "must be in [1, 100]");
         }
         for (i, hgt) in self.heights.iter().enumerate() {
             if !(hgt.is_finite() && *hgt > 0.0 && *hgt < 2.0) {
@@ -176,10 +184,16 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
     };
     let mut parts = Vec::new();
     for k in 0..4 {
+        // Elements of this membrane: n, or round(n_ratio·n) on balloons 1 and 3.
+        let nk = if k % 2 == 1 {
+            (p.n_ratio * n as f64).round() as usize
+        } else {
+            n
+        };
         // Membrane vertices from the support's left end to its right end (in wall frame).
         let mut verts = vec![support_ends[k][0]];
-        for i in 1..n {
-            let s = -0.8 + 1.6 * i as f64 / n as f64;
+        for i in 1..nk {
+            let s = -0.8 + 1.6 * i as f64 / nk as f64;
             let y = -1.0 + p.heights[k] * (1.0 - (s / 0.8).powi(2));
             let v = push(
                 &mut x_ref,
@@ -198,7 +212,7 @@ pub fn build(p: &BalloonsParams) -> Result<Scene, BalloonsError> {
             elements: verts.windows(2).map(|w| [w[0], w[1], 0, 0]).collect(),
             vertices: verts,
             arity: 2,
-            h: Some(h),
+            h: Some(1.6 / nk as f64),
             edges: None,
             faces: None,
         });
@@ -255,7 +269,7 @@ pub fn classify_state(touching: &[(usize, usize)]) -> String {
     }
 }
 
-/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`, `height0..height3` (the `--heights` of `contactlab run`); level
+/// The balloons in the scene registry: parameters `c`, `mu`, `perturb0..perturb3`, `height0..height3` (the `--heights` of `contactlab run`), `n_ratio`; level
 /// `n` elements per membrane, `h = 1.6/n`; end states classified by [`classify_state`].
 pub struct Balloons;
 
@@ -282,8 +296,9 @@ impl BuiltinScene for Balloons {
                 "height1" => p.heights[1] = v,
                 "height2" => p.heights[2] = v,
                 "height3" => p.heights[3] = v,
+                "n_ratio" => p.n_ratio = v,
                 other => anyhow::bail!(
-                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3, height0..height3)"
+                    "scene balloons: unknown parameter {other:?} (known: c, mu, perturb0..perturb3, height0..height3, n_ratio)"
                 ),
             }
         }
@@ -353,5 +368,54 @@ mod tests {
         .err()
         .unwrap();
         assert!(e.to_string().contains("balloon 1"), "{e}");
+        for bad in [0.5, f64::INFINITY, 101.0] {
+            let e = build(&BalloonsParams {
+                n_ratio: bad,
+                ..Default::default()
+            })
+            .err()
+            .unwrap();
+            assert!(e.to_string().contains("invalid n_ratio"), "{e}");
+        }
+    }
+
+    #[test]
+    fn n_ratio_refines_balloons_1_and_3_only() {
+        let s = build(&BalloonsParams {
+            n: 8,
+            n_ratio: 1.5,
+            ..Default::default()
+        })
+        .unwrap();
+        let body = |name: &str| s.mesh.bodies.iter().find(|b| b.name == name).unwrap();
+        for (name, elements) in [
+            ("balloon0", 8),
+            ("balloon1", 12),
+            ("balloon2", 8),
+            ("balloon3", 12),
+        ] {
+            let b = body(name);
+            assert_eq!(b.edges.len(), elements, "{name}");
+            assert!(
+                (b.h - 1.6 / elements as f64).abs() < 1e-15,
+                "{name}: h {}",
+                b.h
+            );
+        }
+        // the scene's h (and ε = h/10) stay those of the coarser membranes
+        assert!((s.h - 0.2).abs() < 1e-15 && (s.eps - 0.02).abs() < 1e-15);
+        // the same ratio 1 is the scene as before
+        let plain = build(&BalloonsParams {
+            n: 8,
+            ..Default::default()
+        })
+        .unwrap();
+        let one = build(&BalloonsParams {
+            n: 8,
+            n_ratio: 1.0,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(plain.x0, one.x0);
     }
 }
