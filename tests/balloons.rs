@@ -116,3 +116,52 @@ fn inadmissible_start_is_refused_with_the_pair_named() {
     assert!(msg.contains("vertex") || msg.contains("edges"), "{msg}");
     assert!(msg.contains("eps = "), "{msg}");
 }
+
+/// `--param n_ratio=1.5` on the command line: balloons 1 and 3 get 1.5 times the elements
+/// (bodies of different mesh sizes), the value reaches `summary.json`, the run stays
+/// admissible; a ratio below 1 and an unknown `--param` are refused, naming them.
+#[test]
+fn the_n_ratio_parameter_reaches_the_run_and_bad_values_are_named() {
+    use std::process::Command;
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("balloons_n_ratio");
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(["run", "balloons", "--n", "8", "--param", "n_ratio=1.5"])
+        .args(["--max-outer", "3", "--quiet", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.code() == Some(0) || o.status.code() == Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["params"]["n_ratio"], 1.5);
+    assert_eq!(s["all_iterates_admissible"], true);
+    // 12 box vertices (4 walls × a corner and two support ends) and the membranes' interior
+    // vertices, 7 and 11 per balloon; 12 box edges and 8 + 12 + 8 + 12 membrane edges
+    let frame = std::fs::read_to_string(dir.join("final.vtu")).unwrap();
+    assert!(
+        frame.contains("NumberOfPoints=\"48\" NumberOfCells=\"52\""),
+        "{}",
+        &frame[..300]
+    );
+    for (arg, needle) in [
+        ("n_ratio=0.5", "invalid n_ratio = 0.5"),
+        ("bogus=1", "bogus"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+            .args([
+                "run", "balloons", "--n", "8", "--param", arg, "--quiet", "--out",
+            ])
+            .arg(dir.join("refused"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{arg}: {err}");
+        assert!(err.contains(needle), "{arg}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
