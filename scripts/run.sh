@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's main command: builds contactlab and runs it. With no arguments it runs the
-# default scene (balloons, n = 40, Clarabel) into runs/balloons-default.
+# default scene (balloons, n = 40, the default backend ip) into runs/balloons-default.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
