@@ -1160,7 +1160,6 @@ pub(crate) fn sqp_step(
         for round in 0..=ctx.sqp.corrections {
             let tp = Instant::now();
             let mut fix: Vec<PairRows> = Vec::new();
-            let mut close = false;
             let mut crossed = false;
             let mut seen = PairSet::default();
             let near = search.candidates(mesh, x, &z, trigger);
@@ -1172,9 +1171,6 @@ pub(crate) fn sqp_step(
                     None => crossed = true,
                     Some(r) => {
                         if r.distance < trigger {
-                            close = true;
-                        }
-                        if r.distance < trigger {
                             fix.push(r);
                         }
                     }
@@ -1184,7 +1180,7 @@ pub(crate) fn sqp_step(
             if crossed {
                 return Ok(Trial::Safeguard);
             }
-            if !close || round == ctx.sqp.corrections {
+            if fix.is_empty() || round == ctx.sqp.corrections {
                 break;
             }
             let ta = Instant::now();
