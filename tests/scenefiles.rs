@@ -129,7 +129,7 @@ const CORPUS: &[(&str, &[&str])] = &[
             ":4:",
             "solver.sqp_curvature",
             "\"hessian\"",
-            "off, psd, full, tangent, interior",
+            "off, psd, full, tangent, interior, auto",
         ],
     ),
     (

@@ -227,7 +227,7 @@ mod tests {
             (
                 "sqp_curvature",
                 "\"hessian\"",
-                "expected one of off, psd, full, tangent, interior"
+                "expected one of off, psd, full, tangent, interior, auto"
             )
         );
         let e = solver(&|s| s.sqp_normal_stiffness = Some(-1.0)).unwrap_err();

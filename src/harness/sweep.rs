@@ -1422,7 +1422,7 @@ mod tests {
         let m = err("outer_method = \"sqp\"\nsqp_curvature = \"hessian\"");
         assert!(
             m.contains("scene block 1 (ring): sqp_curvature \"hessian\"")
-                && m.contains("off, psd, full, tangent, interior"),
+                && m.contains("off, psd, full, tangent, interior, auto"),
             "{m}"
         );
         let m = parse(

@@ -190,17 +190,34 @@ pub enum Curvature {
     /// Hessian's tangential part only (asymptotically), and the normal–tangent coupling, which
     /// makes the block indefinite, is left out.
     Tangent,
+    /// `interior` where the energy's Newton model is indefinite (a gas or a pressure load:
+    /// [`crate::energy::Objective::model_is_psd`] is false) and `off` where it is positive
+    /// semi-definite; the normal stiffness (`SqpSettings::normal_stiffness`) follows the same
+    /// rule. Measured: the two help the gas scenes and slow the others (docs/method.md, "The
+    /// options combined").
+    Auto,
 }
 
 impl Curvature {
     /// Every mode.
-    pub const ALL: [Curvature; 5] = [
+    pub const ALL: [Curvature; 6] = [
         Curvature::Off,
         Curvature::Psd,
         Curvature::Full,
         Curvature::Tangent,
         Curvature::Interior,
+        Curvature::Auto,
     ];
+
+    /// The mode in effect for an energy whose Newton model is (`model_psd`) or is not positive
+    /// semi-definite: [`Curvature::Auto`] resolved, every other mode as it is.
+    pub fn resolve(self, model_psd: bool) -> Curvature {
+        match (self, model_psd) {
+            (Curvature::Auto, true) => Curvature::Off,
+            (Curvature::Auto, false) => Curvature::Interior,
+            (m, _) => m,
+        }
+    }
 
     /// The name on the command line and in JSON.
     pub fn as_str(&self) -> &'static str {
@@ -210,6 +227,7 @@ impl Curvature {
             Curvature::Full => "full",
             Curvature::Tangent => "tangent",
             Curvature::Interior => "interior",
+            Curvature::Auto => "auto",
         }
     }
 
@@ -218,7 +236,7 @@ impl Curvature {
         Curvature::ALL.into_iter().find(|m| m.as_str() == s)
     }
 
-    /// The names, for messages: `off, psd, full, tangent, interior`.
+    /// The names, for messages: `off, psd, full, tangent, interior, auto`.
     pub fn names() -> String {
         Curvature::ALL.map(|m| m.as_str()).join(", ")
     }
@@ -427,6 +445,7 @@ fn add_free(x: &[f64], s: &[f64], col: &[usize], scale: f64) -> Vec<f64> {
 /// triangles, fixed dofs left out), one block per pair of `mu` with `μ_k > 0` in the pairs'
 /// order (deterministic), each projected to its PSD part for [`Curvature::Psd`]. Pairs without
 /// a Hessian ([`crate::contact::hessian`]: parallel edges, degenerate faces) are left out.
+/// `mode` is a resolved one ([`Curvature::resolve`]); an unresolved `auto` adds nothing.
 pub(crate) fn curvature_triplets(
     mesh: &Mesh,
     x: &[f64],
@@ -434,7 +453,7 @@ pub(crate) fn curvature_triplets(
     mu: &HashMap<ContactPair, f64>,
     mode: Curvature,
 ) -> Vec<(usize, usize, f64)> {
-    if mode == Curvature::Off {
+    if mode == Curvature::Off || mode == Curvature::Auto {
         return Vec::new();
     }
     let mut pairs: Vec<(ContactPair, f64)> = mu
@@ -986,8 +1005,16 @@ pub(crate) fn sqp_step(
     }
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
-    // The constraints' curvature with the last step's multipliers (none at the first step).
-    let curvature = curvature_triplets(mesh, x, col, warm, ctx.sqp.curvature);
+    // The constraints' curvature with the last step's multipliers (none at the first step);
+    // `auto` resolved by the energy's model, and the normal stiffness with it.
+    let model_psd = ctx.energy.model_is_psd(inner.hessian_model);
+    let mode = ctx.sqp.curvature.resolve(model_psd);
+    let gamma = if ctx.sqp.curvature == Curvature::Auto && model_psd {
+        0.0
+    } else {
+        ctx.sqp.normal_stiffness
+    };
+    let curvature = curvature_triplets(mesh, x, col, warm, mode);
     let (base, g) = build_qp_with(
         mesh,
         ctx.energy,
@@ -999,8 +1026,8 @@ pub(crate) fn sqp_step(
         inner,
         shift,
         &curvature,
-        matches!(ctx.sqp.curvature, Curvature::Full | Curvature::Interior) && !curvature.is_empty(),
-        &normal_triplets(mesh, x, col, warm, ctx.sqp.normal_stiffness),
+        matches!(mode, Curvature::Full | Curvature::Interior) && !curvature.is_empty(),
+        &normal_triplets(mesh, x, col, warm, gamma),
     )?;
     out.t_assembly_s += ta.elapsed().as_secs_f64();
     // The QP over the carried rows; solved again with the rows its solution violates.
@@ -1277,6 +1304,20 @@ mod tests {
         assert_eq!(OuterMethod::from_name("newton"), None);
         assert_eq!(OuterMethod::names(), "pantz, sqp");
         assert_eq!(OuterMethod::default(), OuterMethod::Pantz);
+        for m in Curvature::ALL {
+            assert_eq!(Curvature::from_name(m.as_str()), Some(m));
+        }
+        assert_eq!(Curvature::names(), "off, psd, full, tangent, interior, auto");
+    }
+
+    #[test]
+    fn auto_curvature_resolves_by_the_model() {
+        assert_eq!(Curvature::Auto.resolve(true), Curvature::Off);
+        assert_eq!(Curvature::Auto.resolve(false), Curvature::Interior);
+        for m in Curvature::ALL.into_iter().filter(|m| *m != Curvature::Auto) {
+            assert_eq!(m.resolve(true), m);
+            assert_eq!(m.resolve(false), m);
+        }
     }
 
     /// Asymmetric balloons n = 8 (a sliding contact) with the SQP method and `sqp`: every
