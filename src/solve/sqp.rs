@@ -1307,7 +1307,10 @@ mod tests {
         for m in Curvature::ALL {
             assert_eq!(Curvature::from_name(m.as_str()), Some(m));
         }
-        assert_eq!(Curvature::names(), "off, psd, full, tangent, interior, auto");
+        assert_eq!(
+            Curvature::names(),
+            "off, psd, full, tangent, interior, auto"
+        );
     }
 
     #[test]
