@@ -9,7 +9,8 @@
 # Usage: bash experiments/restart.sh [N ...]   (default 40 80 160). Environment:
 # CONTACTLAB_BIN (default target/release/contactlab), OUT (default results/restart.csv),
 # METHODS (default "pantz sqp"), EXTRA (more run flags for every run, e.g. SQP options with
-# METHODS=sqp), WORK (default runs/restart).
+# METHODS=sqp), WORK (default runs/restart), SCENE (default balloons; any other static scene
+# is run from its own start only, `start` = default in the CSV, at its own ε).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
@@ -17,33 +18,36 @@ out=${OUT:-results/restart.csv}
 sizes=${*:-40 80 160}
 work=${WORK:-runs/restart}
 methods=${METHODS:-pantz sqp}
+scene=${SCENE:-balloons}
+starts="asym sym"; [ "$scene" = balloons ] || starts=default
 mkdir -p "$work"
 for n in $sizes; do
-  for start in asym sym; do
+  for start in $starts; do
     h=(); [ "$start" = asym ] && h=(--heights 0.9,0.2,0.9,0.2)
     for m in $methods; do
       base=$work/$start-$m-$n
       echo "$start n=$n $m" >&2
       # shellcheck disable=SC2086
-      "$bin" run balloons --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
+      "$bin" run "$scene" --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
         --frame-every 1000000 --out "$base" ${EXTRA:-} >/dev/null 2>&1 || true
       for a in 0.01 0.1; do
         # shellcheck disable=SC2086
-        "$bin" run balloons --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
+        "$bin" run "$scene" --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
           --frame-every 1000000 --start-from "$base/final.vtu" --start-perturb "$a" --out "$base-restart$a" ${EXTRA:-} >/dev/null 2>&1 || true
       done
     done
   done
 done
-python3 - "$out" "$work" "$sizes" "$methods" <<'PY'
+python3 - "$out" "$work" "$sizes" "$methods" "$starts" <<'PY'
 import csv, json, sys
 out, work, sizes, methods = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4].split()
+starts = sys.argv[5].split()
 cols = ["start", "n", "outer_method", "perturb", "perturb_used", "unperturbed_vertices", "status",
         "outer_iterations", "initial_energy", "final_energy", "kappa", "state",
         "energy_minus_first_run"]
 rows = []
 for n in sizes:
-    for start in ["asym", "sym"]:
+    for start in starts:
         for m in methods:
             base = f"{work}/{start}-{m}-{n}"
             s0 = json.load(open(f"{base}/summary.json"))
