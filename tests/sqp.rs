@@ -69,6 +69,22 @@ fn checked_run_of(
     (res, records)
 }
 
+/// [`checked_run_of`], and the run must end `converged` (its certificate holds).
+fn certified_run_of(
+    scene: &contactlab::scene::Scene,
+    settings: &OuterSettings,
+    label: &str,
+) -> (RunResult, Vec<IterationRecord>) {
+    let (res, records) = checked_run_of(scene, settings, label);
+    assert_eq!(
+        res.status,
+        RunStatus::Converged,
+        "{label}: κ {:e}",
+        res.certificate.kappa
+    );
+    (res, records)
+}
+
 #[test]
 fn sqp_on_asymmetric_balloons_stays_admissible_and_ends_below_pantz() {
     let (sqp, records) = checked_run(40, OuterMethod::Sqp);
@@ -192,14 +208,7 @@ fn sqp_path_rows_keep_the_rod_admissible_and_reach_the_same_minimum_sooner() {
             ..Default::default()
         };
         settings.sqp.path_rows = path_rows;
-        let (res, _) = checked_run_of(&scene, &settings, &format!("path_rows {path_rows}"));
-        assert_eq!(
-            res.status,
-            RunStatus::Converged,
-            "path_rows {path_rows}: κ {:e}",
-            res.certificate.kappa
-        );
-        res
+        certified_run_of(&scene, &settings, &format!("path_rows {path_rows}")).0
     };
     let (every, path) = (checked(false), checked(true));
     let (je, jp) = (every.energy, path.energy);
@@ -227,15 +236,7 @@ fn a_tight_shift_reaches_the_balloons3d_minimum_in_fewer_sqp_steps() {
             ..Default::default()
         };
         settings.inner.hessian_model = model;
-        let (res, _) = checked_run_of(&scene, &settings, model.as_str());
-        assert_eq!(
-            res.status,
-            RunStatus::Converged,
-            "{}: κ {:e}",
-            model.as_str(),
-            res.certificate.kappa
-        );
-        res
+        certified_run_of(&scene, &settings, model.as_str()).0
     };
     let (grid, tight) = (
         checked(HessianModel::Shifted),
@@ -271,14 +272,7 @@ fn extrapolated_sqp_steps_stay_admissible_and_reach_the_same_minimum_sooner() {
         settings.sqp.drop_endpoint_rows = true;
         settings.sqp.extrapolate = extrapolate;
         let label = format!("extrapolate {extrapolate}");
-        let (res, records) = checked_run_of(&scene, &settings, &label);
-        assert_eq!(
-            res.status,
-            RunStatus::Converged,
-            "{label}: κ {:e}",
-            res.certificate.kappa
-        );
-        (res, records)
+        certified_run_of(&scene, &settings, &label)
     };
     let ((plain, plain_records), (extra, extra_records)) = (checked(0), checked(3));
     assert!(plain_records
@@ -324,14 +318,7 @@ fn combined_sqp_options_reach_the_asymmetric_minimum_in_fifty_steps() {
             settings.sqp.normal_stiffness = 0.01;
         }
         let label = format!("{curvature:?}");
-        let (res, records) = checked_run_of(&scene, &settings, &label);
-        assert_eq!(
-            res.status,
-            RunStatus::Converged,
-            "{label}: κ {:e}",
-            res.certificate.kappa
-        );
-        (res, records)
+        certified_run_of(&scene, &settings, &label)
     };
     let full_share = |records: &[IterationRecord]| {
         let steps: Vec<f64> = records
@@ -381,10 +368,7 @@ fn auto_curvature_leaves_a_scene_without_a_gas_as_it_is() {
         every_row_option(&mut settings);
         settings.sqp.curvature = curvature;
         settings.sqp.normal_stiffness = gamma;
-        let label = format!("{curvature:?}, γ {gamma}");
-        let (res, _) = checked_run_of(&scene, &settings, &label);
-        assert_eq!(res.status, RunStatus::Converged, "{label}");
-        res
+        certified_run_of(&scene, &settings, &format!("{curvature:?}, γ {gamma}")).0
     };
     let (off, auto, interior) = (
         run_with(Curvature::Off, 0.0),
