@@ -11,13 +11,26 @@ use contactlab::solve::outer::{run, IterationRecord, OuterSettings, RunResult, R
 use contactlab::solve::sqp::{Curvature, OuterMethod};
 use contactlab_solvers::{backend_from_name, default_settings};
 
-fn checked_run(n: usize, method: OuterMethod) -> (RunResult, Vec<IterationRecord>) {
-    let scene = build(&BalloonsParams {
+/// The asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) at `n`.
+fn asymmetric_balloons(n: usize) -> contactlab::scene::Scene {
+    build(&BalloonsParams {
         n,
         heights: [0.9, 0.2, 0.9, 0.2],
         ..Default::default()
     })
-    .unwrap();
+    .unwrap()
+}
+
+/// The default settings with the SQP outer method.
+fn sqp_settings() -> OuterSettings {
+    OuterSettings {
+        method: OuterMethod::Sqp,
+        ..Default::default()
+    }
+}
+
+fn checked_run(n: usize, method: OuterMethod) -> (RunResult, Vec<IterationRecord>) {
+    let scene = asymmetric_balloons(n);
     let settings = OuterSettings {
         method,
         ..Default::default()
@@ -125,10 +138,7 @@ fn sqp_on_asymmetric_balloons_stays_admissible_and_ends_below_pantz() {
 fn sqp_run_of(scene: &contactlab::scene::Scene) -> (RunResult, Vec<f64>, f64, Option<f64>) {
     let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
     let tol0 = b.tolerance().unwrap();
-    let settings = OuterSettings {
-        method: OuterMethod::Sqp,
-        ..Default::default()
-    };
+    let settings = sqp_settings();
     let mut lengths: Vec<f64> = Vec::new();
     let res = run(
         &scene.mesh,
@@ -167,12 +177,7 @@ fn sqp_tightens_the_backend_tolerance_until_the_certificate_holds() {
 /// the stopping rule's first firing.
 #[test]
 fn sqp_endgame_stops_where_the_steps_collapse() {
-    let scene = build(&BalloonsParams {
-        n: 20,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
+    let scene = asymmetric_balloons(20);
     let (res, lengths, _, _) = sqp_run_of(&scene);
     let kappa = res.certificate.kappa;
     assert_eq!(res.status, RunStatus::FixedPoint, "κ {kappa:e}");
@@ -203,10 +208,7 @@ fn sqp_path_rows_keep_the_rod_admissible_and_reach_the_same_minimum_sooner() {
     })
     .unwrap();
     let checked = |path_rows: bool| -> RunResult {
-        let mut settings = OuterSettings {
-            method: OuterMethod::Sqp,
-            ..Default::default()
-        };
+        let mut settings = sqp_settings();
         settings.sqp.path_rows = path_rows;
         certified_run_of(&scene, &settings, &format!("path_rows {path_rows}")).0
     };
@@ -231,10 +233,7 @@ fn a_tight_shift_reaches_the_balloons3d_minimum_in_fewer_sqp_steps() {
     use contactlab::scene::balloons3d::{build, Balloons3dParams};
     let scene = build(&Balloons3dParams::default()).unwrap();
     let checked = |model: HessianModel| -> RunResult {
-        let mut settings = OuterSettings {
-            method: OuterMethod::Sqp,
-            ..Default::default()
-        };
+        let mut settings = sqp_settings();
         settings.inner.hessian_model = model;
         certified_run_of(&scene, &settings, model.as_str()).0
     };
@@ -258,17 +257,9 @@ fn a_tight_shift_reaches_the_balloons3d_minimum_in_fewer_sqp_steps() {
 /// (measured with `contactlab run`: 68 against 78, `results/sqp_extrapolate.csv`).
 #[test]
 fn extrapolated_sqp_steps_stay_admissible_and_reach_the_same_minimum_sooner() {
-    let scene = build(&BalloonsParams {
-        n: 40,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
+    let scene = asymmetric_balloons(40);
     let checked = |extrapolate: usize| -> (RunResult, Vec<IterationRecord>) {
-        let mut settings = OuterSettings {
-            method: OuterMethod::Sqp,
-            ..Default::default()
-        };
+        let mut settings = sqp_settings();
         settings.sqp.drop_endpoint_rows = true;
         settings.sqp.extrapolate = extrapolate;
         let label = format!("extrapolate {extrapolate}");
@@ -300,17 +291,9 @@ fn extrapolated_sqp_steps_stay_admissible_and_reach_the_same_minimum_sooner() {
 /// same stiffness is the same run on this gas scene, bit for bit.
 #[test]
 fn combined_sqp_options_reach_the_asymmetric_minimum_in_fifty_steps() {
-    let scene = build(&BalloonsParams {
-        n: 40,
-        heights: [0.9, 0.2, 0.9, 0.2],
-        ..Default::default()
-    })
-    .unwrap();
+    let scene = asymmetric_balloons(40);
     let checked = |curvature: Option<Curvature>| -> (RunResult, Vec<IterationRecord>) {
-        let mut settings = OuterSettings {
-            method: OuterMethod::Sqp,
-            ..Default::default()
-        };
+        let mut settings = sqp_settings();
         settings.sqp.drop_endpoint_rows = true;
         if let Some(c) = curvature {
             every_row_option(&mut settings);
@@ -361,10 +344,7 @@ fn auto_curvature_leaves_a_scene_without_a_gas_as_it_is() {
     })
     .unwrap();
     let run_with = |curvature: Curvature, gamma: f64| -> RunResult {
-        let mut settings = OuterSettings {
-            method: OuterMethod::Sqp,
-            ..Default::default()
-        };
+        let mut settings = sqp_settings();
         every_row_option(&mut settings);
         settings.sqp.curvature = curvature;
         settings.sqp.normal_stiffness = gamma;

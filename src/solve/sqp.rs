@@ -242,6 +242,20 @@ impl Curvature {
     }
 }
 
+impl SqpSettings {
+    /// The curvature mode and the normal stiffness γ in effect for an energy whose Newton model
+    /// is (`model_psd`) or is not positive semi-definite: `auto` resolved
+    /// ([`Curvature::resolve`]), and γ dropped where `auto` resolved to `off`.
+    pub fn model_terms(&self, model_psd: bool) -> (Curvature, f64) {
+        let mode = self.curvature.resolve(model_psd);
+        if self.curvature == Curvature::Auto && mode == Curvature::Off {
+            (mode, 0.0)
+        } else {
+            (mode, self.normal_stiffness)
+        }
+    }
+}
+
 impl Default for SqpSettings {
     fn default() -> Self {
         SqpSettings {
@@ -1007,13 +1021,9 @@ pub(crate) fn sqp_step(
     let ta = Instant::now();
     // The constraints' curvature with the last step's multipliers (none at the first step);
     // `auto` resolved by the energy's model, and the normal stiffness with it.
-    let model_psd = ctx.energy.model_is_psd(inner.hessian_model);
-    let mode = ctx.sqp.curvature.resolve(model_psd);
-    let gamma = if ctx.sqp.curvature == Curvature::Auto && model_psd {
-        0.0
-    } else {
-        ctx.sqp.normal_stiffness
-    };
+    let (mode, gamma) = ctx
+        .sqp
+        .model_terms(ctx.energy.model_is_psd(inner.hessian_model));
     let curvature = curvature_triplets(mesh, x, col, warm, mode);
     let (base, g) = build_qp_with(
         mesh,
@@ -1321,6 +1331,24 @@ mod tests {
             assert_eq!(m.resolve(true), m);
             assert_eq!(m.resolve(false), m);
         }
+        let with = |curvature| SqpSettings {
+            curvature,
+            normal_stiffness: 0.01,
+            ..Default::default()
+        };
+        assert_eq!(
+            with(Curvature::Auto).model_terms(true),
+            (Curvature::Off, 0.0)
+        );
+        assert_eq!(
+            with(Curvature::Auto).model_terms(false),
+            (Curvature::Interior, 0.01)
+        );
+        // an explicit mode keeps the stiffness it was given, model or not
+        assert_eq!(
+            with(Curvature::Off).model_terms(true),
+            (Curvature::Off, 0.01)
+        );
     }
 
     /// Asymmetric balloons n = 8 (a sliding contact) with the SQP method and `sqp`: every
