@@ -10,7 +10,8 @@
 # CONTACTLAB_BIN (default target/release/contactlab), OUT (default results/restart.csv),
 # METHODS (default "pantz sqp"), EXTRA (more run flags for every run, e.g. SQP options with
 # METHODS=sqp), WORK (default runs/restart), SCENE (default balloons; any other static scene
-# is run from its own start only, `start` = default in the CSV, at its own ε).
+# is run from its own start only, `start` = default in the CSV, at its own ε; a scene file,
+# SCENE=path.toml, is run without --n, the sizes then only label the rows).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
@@ -24,15 +25,16 @@ mkdir -p "$work"
 for n in $sizes; do
   for start in $starts; do
     h=(); [ "$start" = asym ] && h=(--heights 0.9,0.2,0.9,0.2)
+    nf=(--n "$n"); case $scene in *.toml) nf=() ;; esac
     for m in $methods; do
       base=$work/$start-$m-$n
       echo "$start n=$n $m" >&2
       # shellcheck disable=SC2086
-      "$bin" run "$scene" --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
+      "$bin" run "$scene" "${nf[@]}" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
         --frame-every 1000000 --out "$base" ${EXTRA:-} >/dev/null 2>&1 || true
       for a in 0.01 0.1; do
         # shellcheck disable=SC2086
-        "$bin" run "$scene" --n "$n" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
+        "$bin" run "$scene" "${nf[@]}" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
           --frame-every 1000000 --start-from "$base/final.vtu" --start-perturb "$a" --out "$base-restart$a" ${EXTRA:-} >/dev/null 2>&1 || true
       done
     done

@@ -552,6 +552,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     let solver = "[solver]\nouter_method = \"sqp\"\nsqp_curvature = \"psd\"\n\
                   sqp_normal_stiffness = 0.01\nsqp_drop_endpoint_rows = true\n\
                   sqp_extend_rows = true\nsqp_drop_vertex_rows = true\n\
+                  sqp_drop_side_rows = true\n\
                   sqp_path_rows = true\nsqp_implying_rows = true\n\
                   sqp_extrapolate = 2\n\n";
     for name in ["good_strings.toml", "dynamic_string.toml"] {
@@ -603,6 +604,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 .unwrap(),
             s["settings"]["sqp"]["extend_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["drop_vertex_rows"].as_bool().unwrap(),
+            s["settings"]["sqp"]["drop_side_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["path_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["implying_rows"].as_bool().unwrap(),
             s["settings"]["sqp"]["extrapolate"].as_u64().unwrap(),
@@ -615,7 +617,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         // the file's values
         assert_eq!(
             sqp(&summary(name, dynamic)),
-            ("psd".into(), 0.01, true, true, true, true, true, 2),
+            ("psd".into(), 0.01, true, true, true, true, true, true, 2),
             "{name}"
         );
         // a flag given on the command line wins, even at its default value; the other key
@@ -623,7 +625,7 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         let flags = [dynamic, &["--sqp-curvature", "off"]].concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("off".into(), 0.01, true, true, true, true, true, 2),
+            ("off".into(), 0.01, true, true, true, true, true, true, 2),
             "{name}"
         );
         let flags = [
@@ -646,7 +648,17 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
         .concat();
         assert_eq!(
             sqp(&summary(name, &flags)),
-            ("tangent".into(), 0.0, false, false, true, false, true, 3),
+            (
+                "tangent".into(),
+                0.0,
+                false,
+                false,
+                true,
+                true,
+                false,
+                true,
+                3
+            ),
             "{name}"
         );
         // with the Pantz method (a flag over the file's sqp) the model's settings would be
@@ -668,7 +680,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &[
                 "--sqp-curvature psd and --sqp-normal-stiffness 0.01 and \
                  --sqp-drop-endpoint-rows and --sqp-extend-rows and --sqp-drop-vertex-rows and \
-                 --sqp-path-rows and --sqp-implying-rows and --sqp-extrapolate 2",
+                 --sqp-drop-side-rows and --sqp-path-rows and --sqp-implying-rows and \
+                 --sqp-extrapolate 2",
                 "pantz",
             ],
         );
@@ -677,8 +690,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &flags,
             &[
                 "--sqp-normal-stiffness 0.01 and --sqp-drop-endpoint-rows and \
-                 --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-path-rows and \
-                 --sqp-implying-rows and --sqp-extrapolate 2",
+                 --sqp-extend-rows and --sqp-drop-vertex-rows and --sqp-drop-side-rows and \
+                 --sqp-path-rows and --sqp-implying-rows and --sqp-extrapolate 2",
                 "pantz",
             ],
         );
@@ -694,6 +707,8 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
                 "--sqp-extend-rows",
                 "false",
                 "--sqp-drop-vertex-rows",
+                "false",
+                "--sqp-drop-side-rows",
                 "false",
                 "--sqp-path-rows",
                 "false",
@@ -731,6 +746,11 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-drop-vertex-rows", "true"][..],
             "refused_ring_vertex",
             "--sqp-drop-vertex-rows set with the pantz outer method",
+        ),
+        (
+            &["--sqp-drop-side-rows"][..],
+            "refused_ring_side",
+            "--sqp-drop-side-rows set with the pantz outer method",
         ),
         (
             &["--sqp-path-rows"][..],

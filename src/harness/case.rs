@@ -54,6 +54,8 @@ pub struct CaseSettings {
     pub sqp_extend_rows: bool,
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body.
     pub sqp_drop_vertex_rows: bool,
+    /// SQP, 2D: leave out the side rows a corner's row implies.
+    pub sqp_drop_side_rows: bool,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's path.
     pub sqp_path_rows: bool,
     /// SQP: add the rows that would imply a violated endpoint or vertex row.
@@ -152,6 +154,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.drop_endpoint_rows = cs.sqp_drop_endpoint_rows;
     settings.sqp.extend_rows = cs.sqp_extend_rows;
     settings.sqp.drop_vertex_rows = cs.sqp_drop_vertex_rows;
+    settings.sqp.drop_side_rows = cs.sqp_drop_side_rows;
     settings.sqp.path_rows = cs.sqp_path_rows;
     settings.sqp.implying_rows = cs.sqp_implying_rows;
     settings.sqp.extrapolate = cs.sqp_extrapolate;

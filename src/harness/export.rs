@@ -76,6 +76,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_drop_endpoint_rows: false,
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
+        sqp_drop_side_rows: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,

@@ -129,6 +129,14 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_drop_vertex_rows: bool,
+    /// SQP, 2D: leave out a vertex's row against an edge of the other body (closest point
+    /// inside the edge) when one endpoint's row against an edge at the vertex is in the QP and
+    /// the other endpoint lies farther from that edge's line: the side of a corner passing over
+    /// the vertex (docs/method.md, "Rows against the side of a corner"). `--sqp-drop-side-rows
+    /// false` turns off a scene file's `sqp_drop_side_rows = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_drop_side_rows: bool,
     /// SQP: add a row the QP's solution violates only where the pair's exact distance comes
     /// within ε + δ on the straight motion to that solution (docs/method.md, "Rows by the
     /// step's path"). `--sqp-path-rows false` turns off a scene file's `sqp_path_rows = true`.
@@ -397,6 +405,7 @@ fn scene_from_file(
     from_file!("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows);
     from_file!("sqp_extend_rows", sqp_extend_rows);
     from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
+    from_file!("sqp_drop_side_rows", sqp_drop_side_rows);
     from_file!("sqp_path_rows", sqp_path_rows);
     from_file!("sqp_implying_rows", sqp_implying_rows);
     from_file!("sqp_extrapolate", sqp_extrapolate);
@@ -431,6 +440,7 @@ impl RunArgs {
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
+            sqp_drop_side_rows: self.sqp_drop_side_rows,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
@@ -468,6 +478,11 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_drop_vertex_rows,
                 String::new(),
             ),
+            (
+                "--sqp-drop-side-rows",
+                settings.sqp_drop_side_rows,
+                String::new(),
+            ),
             ("--sqp-path-rows", settings.sqp_path_rows, String::new()),
             (
                 "--sqp-implying-rows",
@@ -487,7 +502,7 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
-                 --sqp-drop-vertex-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
+                 --sqp-drop-vertex-rows, --sqp-drop-side-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
                  or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()

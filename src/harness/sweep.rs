@@ -207,6 +207,9 @@ pub struct Common {
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied by
     /// that vertex's row (default false; with `outer_method = "sqp"` only).
     pub sqp_drop_vertex_rows: Option<bool>,
+    /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
+    /// implies (default false; with `outer_method = "sqp"` only).
+    pub sqp_drop_side_rows: Option<bool>,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (default false; with `outer_method = "sqp"` only).
     pub sqp_path_rows: Option<bool>,
@@ -418,6 +421,7 @@ struct BlockSettings {
     sqp_drop_endpoint_rows: bool,
     sqp_extend_rows: bool,
     sqp_drop_vertex_rows: bool,
+    sqp_drop_side_rows: bool,
     sqp_path_rows: bool,
     sqp_implying_rows: bool,
     sqp_extrapolate: usize,
@@ -494,6 +498,10 @@ impl BlockSettings {
             .sqp_drop_vertex_rows
             .or(defaults.sqp_drop_vertex_rows)
             .unwrap_or(false);
+        let sqp_drop_side_rows = c
+            .sqp_drop_side_rows
+            .or(defaults.sqp_drop_side_rows)
+            .unwrap_or(false);
         let sqp_path_rows = c.sqp_path_rows.or(defaults.sqp_path_rows).unwrap_or(false);
         let sqp_implying_rows = c
             .sqp_implying_rows
@@ -537,6 +545,7 @@ impl BlockSettings {
                 ("sqp_drop_endpoint_rows", sqp_drop_endpoint_rows),
                 ("sqp_extend_rows", sqp_extend_rows),
                 ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
+                ("sqp_drop_side_rows", sqp_drop_side_rows),
                 ("sqp_path_rows", sqp_path_rows),
                 ("sqp_implying_rows", sqp_implying_rows),
                 ("sqp_extrapolate", sqp_extrapolate != 0),
@@ -548,7 +557,7 @@ impl BlockSettings {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
-                     sqp_drop_vertex_rows, sqp_path_rows, sqp_implying_rows and \
+                     sqp_drop_vertex_rows, sqp_drop_side_rows, sqp_path_rows, sqp_implying_rows and \
                      sqp_extrapolate apply to outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
@@ -605,6 +614,7 @@ impl BlockSettings {
             sqp_drop_endpoint_rows,
             sqp_extend_rows,
             sqp_drop_vertex_rows,
+            sqp_drop_side_rows,
             sqp_path_rows,
             sqp_implying_rows,
             sqp_extrapolate,
@@ -640,6 +650,7 @@ impl BlockSettings {
             sqp_drop_endpoint_rows: self.sqp_drop_endpoint_rows,
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
+            sqp_drop_side_rows: self.sqp_drop_side_rows,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
@@ -665,12 +676,13 @@ impl BlockSettings {
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
 /// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
-/// endpoint rows, extended rows, dropped vertex rows, path rows, implying rows, extrapolation) only when set, so that the keys of
+/// endpoint rows, extended rows, dropped vertex rows, dropped side rows, path rows, implying rows,
+/// extrapolation) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -718,6 +730,11 @@ fn run_key(spec: &RunSpec) -> String {
         },
         if s.sqp_drop_vertex_rows {
             "|drop-vertex-rows"
+        } else {
+            ""
+        },
+        if s.sqp_drop_side_rows {
+            "|drop-side-rows"
         } else {
             ""
         },
@@ -980,6 +997,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_drop_endpoint_rows: false,
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
+        sqp_drop_side_rows: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
@@ -1343,6 +1361,14 @@ mod tests {
         assert_eq!(
             runs[0].key,
             format!("{plain}|method=sqp|drop-vertex-rows|implying-rows")
+        );
+        let runs = ring("outer_method = \"sqp\"\nsqp_drop_side_rows = true").unwrap();
+        assert!(case::outer_settings(&runs[0].settings).sqp.drop_side_rows);
+        assert_eq!(runs[0].key, format!("{plain}|method=sqp|drop-side-rows"));
+        let err = ring("sqp_drop_side_rows = true").err().unwrap().to_string();
+        assert!(
+            err.contains("sqp_drop_side_rows set with outer_method = \"pantz\""),
+            "{err}"
         );
         let err = ring("outer_method = \"sqp\"\nsqp_implying_rows = true")
             .err()

@@ -141,6 +141,9 @@ pub struct RunSettings {
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body
     /// (`--sqp-drop-vertex-rows`).
     pub sqp_drop_vertex_rows: bool,
+    /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
+    /// implies (`--sqp-drop-side-rows`).
+    pub sqp_drop_side_rows: bool,
     /// SQP: add a violated row only where the pair comes within `ε + δ` on the step's straight
     /// path (`--sqp-path-rows`).
     pub sqp_path_rows: bool,
@@ -174,6 +177,7 @@ impl Default for RunSettings {
             sqp_drop_endpoint_rows: outer.sqp.drop_endpoint_rows,
             sqp_extend_rows: outer.sqp.extend_rows,
             sqp_drop_vertex_rows: outer.sqp.drop_vertex_rows,
+            sqp_drop_side_rows: outer.sqp.drop_side_rows,
             sqp_path_rows: outer.sqp.path_rows,
             sqp_implying_rows: outer.sqp.implying_rows,
             sqp_extrapolate: outer.sqp.extrapolate,
@@ -312,6 +316,7 @@ impl RunSettings {
         settings.sqp.drop_endpoint_rows = self.sqp_drop_endpoint_rows;
         settings.sqp.extend_rows = self.sqp_extend_rows;
         settings.sqp.drop_vertex_rows = self.sqp_drop_vertex_rows;
+        settings.sqp.drop_side_rows = self.sqp_drop_side_rows;
         settings.sqp.path_rows = self.sqp_path_rows;
         settings.sqp.implying_rows = self.sqp_implying_rows;
         settings.sqp.extrapolate = self.sqp_extrapolate;

@@ -53,6 +53,9 @@ pub struct SolverSpec {
     /// SQP, 2D: leave out the rows whose closest point is a vertex of the other body, implied
     /// by that vertex's row (used with `outer_method = "sqp"`).
     pub sqp_drop_vertex_rows: Option<bool>,
+    /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
+    /// implies (used with `outer_method = "sqp"`).
+    pub sqp_drop_side_rows: Option<bool>,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (used with `outer_method = "sqp"`).
     pub sqp_path_rows: Option<bool>,
