@@ -48,6 +48,7 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
         sqp_drop_side_rows: false,
+        sqp_extend_fixed: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,

@@ -748,6 +748,16 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             "--sqp-drop-vertex-rows set with the pantz outer method",
         ),
         (
+            &["--sqp-extend-rows", "--sqp-extend-fixed"][..],
+            "refused_ring_extend_fixed",
+            "--sqp-extend-rows and --sqp-extend-fixed set with the pantz outer method",
+        ),
+        (
+            &["--outer-method", "sqp", "--sqp-extend-fixed"][..],
+            "refused_ring_fixed_alone",
+            "--sqp-extend-fixed set without --sqp-extend-rows",
+        ),
+        (
             &["--sqp-drop-side-rows"][..],
             "refused_ring_side",
             "--sqp-drop-side-rows set with the pantz outer method",

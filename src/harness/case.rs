@@ -56,6 +56,8 @@ pub struct CaseSettings {
     pub sqp_drop_vertex_rows: bool,
     /// SQP, 2D: leave out the side rows a corner's row implies.
     pub sqp_drop_side_rows: bool,
+    /// SQP: no chain limit for the extended rows against a fixed element.
+    pub sqp_extend_fixed: bool,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's path.
     pub sqp_path_rows: bool,
     /// SQP: add the rows that would imply a violated endpoint or vertex row.
@@ -155,6 +157,7 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.extend_rows = cs.sqp_extend_rows;
     settings.sqp.drop_vertex_rows = cs.sqp_drop_vertex_rows;
     settings.sqp.drop_side_rows = cs.sqp_drop_side_rows;
+    settings.sqp.extend_fixed = cs.sqp_extend_fixed;
     settings.sqp.path_rows = cs.sqp_path_rows;
     settings.sqp.implying_rows = cs.sqp_implying_rows;
     settings.sqp.extrapolate = cs.sqp_extrapolate;

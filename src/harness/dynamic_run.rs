@@ -181,6 +181,7 @@ fn run_prepared(
         sqp_extend_rows: rs.sqp_extend_rows,
         sqp_drop_vertex_rows: rs.sqp_drop_vertex_rows,
         sqp_drop_side_rows: rs.sqp_drop_side_rows,
+        sqp_extend_fixed: rs.sqp_extend_fixed,
         sqp_path_rows: rs.sqp_path_rows,
         sqp_implying_rows: rs.sqp_implying_rows,
         sqp_extrapolate: rs.sqp_extrapolate,

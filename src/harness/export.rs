@@ -77,6 +77,7 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
         sqp_drop_side_rows: false,
+        sqp_extend_fixed: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,

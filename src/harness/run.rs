@@ -137,6 +137,14 @@ pub struct RunArgs {
     #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
           action = clap::ArgAction::Set)]
     pub sqp_drop_side_rows: bool,
+    /// SQP, with --sqp-extend-rows: against an element whose vertices are all fixed, take the
+    /// extended row however far past the boundary the chain test has to walk (otherwise at
+    /// most 4 edges): a fixed element's line does not move, so its row is exact at any
+    /// distance (docs/method.md, "Rows against the extended element"). `--sqp-extend-fixed
+    /// false` turns off a scene file's `sqp_extend_fixed = true`.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", default_value_t = false,
+          action = clap::ArgAction::Set)]
+    pub sqp_extend_fixed: bool,
     /// SQP: add a row the QP's solution violates only where the pair's exact distance comes
     /// within ε + δ on the straight motion to that solution (docs/method.md, "Rows by the
     /// step's path"). `--sqp-path-rows false` turns off a scene file's `sqp_path_rows = true`.
@@ -406,6 +414,7 @@ fn scene_from_file(
     from_file!("sqp_extend_rows", sqp_extend_rows);
     from_file!("sqp_drop_vertex_rows", sqp_drop_vertex_rows);
     from_file!("sqp_drop_side_rows", sqp_drop_side_rows);
+    from_file!("sqp_extend_fixed", sqp_extend_fixed);
     from_file!("sqp_path_rows", sqp_path_rows);
     from_file!("sqp_implying_rows", sqp_implying_rows);
     from_file!("sqp_extrapolate", sqp_extrapolate);
@@ -441,6 +450,7 @@ impl RunArgs {
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_drop_side_rows: self.sqp_drop_side_rows,
+            sqp_extend_fixed: self.sqp_extend_fixed,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
@@ -474,6 +484,11 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
             ),
             ("--sqp-extend-rows", settings.sqp_extend_rows, String::new()),
             (
+                "--sqp-extend-fixed",
+                settings.sqp_extend_fixed,
+                String::new(),
+            ),
+            (
                 "--sqp-drop-vertex-rows",
                 settings.sqp_drop_vertex_rows,
                 String::new(),
@@ -501,13 +516,20 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
         if !set.is_empty() {
             bail!(
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
-                 --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, \
+                 --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, --sqp-extend-fixed, \
                  --sqp-drop-vertex-rows, --sqp-drop-side-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
                  or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );
         }
+    }
+    if settings.sqp_extend_fixed && !settings.sqp_extend_rows {
+        bail!(
+            "--sqp-extend-fixed set without --sqp-extend-rows (or the same keys in a scene \
+             file's [solver]): it lifts a limit of the extended rows, and does nothing \
+             without them"
+        );
     }
     if settings.sqp_implying_rows
         && !(settings.sqp_drop_endpoint_rows || settings.sqp_drop_vertex_rows)

@@ -169,6 +169,9 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_drop_side_rows {
         s.sqp_drop_side_rows = v;
     }
+    if let Some(v) = spec.sqp_extend_fixed {
+        s.sqp_extend_fixed = v;
+    }
     if let Some(v) = spec.sqp_path_rows {
         s.sqp_path_rows = v;
     }

@@ -210,6 +210,9 @@ pub struct Common {
     /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
     /// implies (default false; with `outer_method = "sqp"` only).
     pub sqp_drop_side_rows: Option<bool>,
+    /// SQP, with `sqp_extend_rows`: the extended rows against a fixed element without the
+    /// chain limit (default false; with `outer_method = "sqp"` only).
+    pub sqp_extend_fixed: Option<bool>,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (default false; with `outer_method = "sqp"` only).
     pub sqp_path_rows: Option<bool>,
@@ -422,6 +425,7 @@ struct BlockSettings {
     sqp_extend_rows: bool,
     sqp_drop_vertex_rows: bool,
     sqp_drop_side_rows: bool,
+    sqp_extend_fixed: bool,
     sqp_path_rows: bool,
     sqp_implying_rows: bool,
     sqp_extrapolate: usize,
@@ -502,6 +506,10 @@ impl BlockSettings {
             .sqp_drop_side_rows
             .or(defaults.sqp_drop_side_rows)
             .unwrap_or(false);
+        let sqp_extend_fixed = c
+            .sqp_extend_fixed
+            .or(defaults.sqp_extend_fixed)
+            .unwrap_or(false);
         let sqp_path_rows = c.sqp_path_rows.or(defaults.sqp_path_rows).unwrap_or(false);
         let sqp_implying_rows = c
             .sqp_implying_rows
@@ -546,6 +554,7 @@ impl BlockSettings {
                 ("sqp_extend_rows", sqp_extend_rows),
                 ("sqp_drop_vertex_rows", sqp_drop_vertex_rows),
                 ("sqp_drop_side_rows", sqp_drop_side_rows),
+                ("sqp_extend_fixed", sqp_extend_fixed),
                 ("sqp_path_rows", sqp_path_rows),
                 ("sqp_implying_rows", sqp_implying_rows),
                 ("sqp_extrapolate", sqp_extrapolate != 0),
@@ -557,12 +566,19 @@ impl BlockSettings {
                 bail!(
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
-                     sqp_drop_vertex_rows, sqp_drop_side_rows, sqp_path_rows, sqp_implying_rows and \
+                     sqp_drop_vertex_rows, sqp_drop_side_rows, sqp_extend_fixed, sqp_path_rows, \
+                     sqp_implying_rows and \
                      sqp_extrapolate apply to outer_method = \"sqp\" only",
                     set.join(" and "),
                     outer_method.as_str()
                 );
             }
+        }
+        if sqp_extend_fixed && !sqp_extend_rows {
+            bail!(
+                "{at}: sqp_extend_fixed set without sqp_extend_rows: it lifts a limit of the \
+                 extended rows, and does nothing without them"
+            );
         }
         if sqp_implying_rows && !(sqp_drop_endpoint_rows || sqp_drop_vertex_rows) {
             bail!(
@@ -615,6 +631,7 @@ impl BlockSettings {
             sqp_extend_rows,
             sqp_drop_vertex_rows,
             sqp_drop_side_rows,
+            sqp_extend_fixed,
             sqp_path_rows,
             sqp_implying_rows,
             sqp_extrapolate,
@@ -651,6 +668,7 @@ impl BlockSettings {
             sqp_extend_rows: self.sqp_extend_rows,
             sqp_drop_vertex_rows: self.sqp_drop_vertex_rows,
             sqp_drop_side_rows: self.sqp_drop_side_rows,
+            sqp_extend_fixed: self.sqp_extend_fixed,
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
@@ -676,13 +694,14 @@ impl BlockSettings {
 /// backend, accuracy, pruning, tol_J, max_outer, then max_inner, the time limit, a Newton
 /// model other than the default, an outer method other than `pantz`, an SQP curvature other
 /// than `off`, an SQP normal stiffness other than 0 and the SQP's row options (dropped
-/// endpoint rows, extended rows, dropped vertex rows, dropped side rows, path rows, implying rows,
+/// endpoint rows, extended rows, extended rows against fixed elements, dropped vertex rows,
+/// dropped side rows, path rows, implying rows,
 /// extrapolation) only when set, so that the keys of
 /// sweeps without them (and of every run made before the SQP method) stay as they were.
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -725,6 +744,11 @@ fn run_key(spec: &RunSpec) -> String {
         },
         if s.sqp_extend_rows {
             "|extend-rows"
+        } else {
+            ""
+        },
+        if s.sqp_extend_fixed {
+            "|extend-fixed"
         } else {
             ""
         },
@@ -998,6 +1022,7 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_extend_rows: false,
         sqp_drop_vertex_rows: false,
         sqp_drop_side_rows: false,
+        sqp_extend_fixed: false,
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
@@ -1361,6 +1386,21 @@ mod tests {
         assert_eq!(
             runs[0].key,
             format!("{plain}|method=sqp|drop-vertex-rows|implying-rows")
+        );
+        let runs = ring("outer_method = \"sqp\"\nsqp_extend_rows = true\nsqp_extend_fixed = true")
+            .unwrap();
+        assert!(case::outer_settings(&runs[0].settings).sqp.extend_fixed);
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|extend-rows|extend-fixed")
+        );
+        let err = ring("outer_method = \"sqp\"\nsqp_extend_fixed = true")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("sqp_extend_fixed set without sqp_extend_rows"),
+            "{err}"
         );
         let runs = ring("outer_method = \"sqp\"\nsqp_drop_side_rows = true").unwrap();
         assert!(case::outer_settings(&runs[0].settings).sqp.drop_side_rows);

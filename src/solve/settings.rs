@@ -144,6 +144,9 @@ pub struct RunSettings {
     /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
     /// implies (`--sqp-drop-side-rows`).
     pub sqp_drop_side_rows: bool,
+    /// SQP: no chain limit for the extended rows against a fixed element
+    /// (`--sqp-extend-fixed`).
+    pub sqp_extend_fixed: bool,
     /// SQP: add a violated row only where the pair comes within `ε + δ` on the step's straight
     /// path (`--sqp-path-rows`).
     pub sqp_path_rows: bool,
@@ -178,6 +181,7 @@ impl Default for RunSettings {
             sqp_extend_rows: outer.sqp.extend_rows,
             sqp_drop_vertex_rows: outer.sqp.drop_vertex_rows,
             sqp_drop_side_rows: outer.sqp.drop_side_rows,
+            sqp_extend_fixed: outer.sqp.extend_fixed,
             sqp_path_rows: outer.sqp.path_rows,
             sqp_implying_rows: outer.sqp.implying_rows,
             sqp_extrapolate: outer.sqp.extrapolate,
@@ -317,6 +321,7 @@ impl RunSettings {
         settings.sqp.extend_rows = self.sqp_extend_rows;
         settings.sqp.drop_vertex_rows = self.sqp_drop_vertex_rows;
         settings.sqp.drop_side_rows = self.sqp_drop_side_rows;
+        settings.sqp.extend_fixed = self.sqp_extend_fixed;
         settings.sqp.path_rows = self.sqp_path_rows;
         settings.sqp.implying_rows = self.sqp_implying_rows;
         settings.sqp.extrapolate = self.sqp_extrapolate;

@@ -154,6 +154,10 @@ pub struct SqpSettings {
     /// in the QP and the other endpoint lies farther from that edge's line on the same side
     /// ([`implied_row`]; `--sqp-drop-side-rows`).
     pub drop_side_rows: bool,
+    /// With `extend_rows`: against an element whose vertices are all fixed, the chain test of
+    /// [`extended_row`] walks as far as the extension's closest point, without the limit of
+    /// [`EXTEND_CHAIN`] edges (`--sqp-extend-fixed`).
+    pub extend_fixed: bool,
     /// Add a row the QP's solution violates only where the pair's exact distance comes within
     /// `ε + δ` on the straight motion from x to that solution (conservative advancement, the
     /// kernel of the continuous check); the rows carried from the start are kept
@@ -273,6 +277,7 @@ impl Default for SqpSettings {
             extend_rows: false,
             drop_vertex_rows: false,
             drop_side_rows: false,
+            extend_fixed: false,
             path_rows: false,
             implying_rows: false,
             extrapolate: 0,
@@ -838,6 +843,12 @@ fn implying_pairs(
     out
 }
 
+/// The longest chain [`extended_row`] walks past an element's boundary (edges): a farther
+/// extension is not taken (with [`SqpSettings::extend_fixed`], not for a fixed element). The
+/// linearized row against a moving edge's line errs by the edge's turn times the distance
+/// along the line, so a far extension of a moving edge is not trusted.
+pub const EXTEND_CHAIN: usize = 4;
+
 /// The row of a pair whose closest point on an element is on that element's boundary, taken
 /// against the element extended past that boundary: in 2D the line through the edge, between
 /// two edges of 3D curves the line–line distance (surfaces and faces keep their rows: `None`).
@@ -850,12 +861,16 @@ fn implying_pairs(
 /// past the boundary does not cut, where the distance to the boundary feature (a point) is a
 /// convex function whose linearization cuts every tangential motion towards it
 /// (docs/method.md, "Rows against the extended element"). `None`: the pair keeps its row.
-fn extended_row(mesh: &Mesh, x: &[f64], r: &PairRows, adj: &Adjacency) -> Option<PairRows> {
+fn extended_row(
+    mesh: &Mesh,
+    x: &[f64],
+    r: &PairRows,
+    adj: &Adjacency,
+    fixed_unlimited: bool,
+) -> Option<PairRows> {
     // round-off allowance of the side test, relative to the edge (a straight chain is in the
     // extension)
     const TURN: f64 = 1e-9;
-    // the longest chain walked past the boundary (edges): a farther extension is not taken
-    const CHAIN: usize = 4;
     let p3v = |v: usize| -> Vector3<f64> {
         if mesh.dim == 2 {
             Vector3::new(x[2 * v], x[2 * v + 1], 0.0)
@@ -879,7 +894,14 @@ fn extended_row(mesh: &Mesh, x: &[f64], r: &PairRows, adj: &Adjacency) -> Option
         let pw = p3v(w);
         let (mut prev, mut cur) = (edge, w);
         let mut least = f64::INFINITY;
-        for _ in 0..CHAIN {
+        // a fixed element's line does not move: with `fixed_unlimited`, its chain is walked
+        // as far as it takes
+        let limit = if fixed_unlimited && mesh.edges[edge].iter().all(|&v| mesh.fixed[v]) {
+            usize::MAX
+        } else {
+            EXTEND_CHAIN
+        };
+        for _ in 0..limit {
             let mut next = adj.vertex_edges[cur].iter().filter(|&&e| e != prev);
             let (Some(&e), None) = (next.next(), next.next()) else {
                 return None;
@@ -1081,7 +1103,7 @@ pub(crate) fn sqp_step(
     // a pair's row, against the extended element where `extended_row` takes it
     let extended = |r: PairRows| -> PairRows {
         match (&adjacency, extend) {
-            (Some(adj), true) => extended_row(mesh, x, &r, adj).unwrap_or(r),
+            (Some(adj), true) => extended_row(mesh, x, &r, adj, ctx.sqp.extend_fixed).unwrap_or(r),
             _ => r,
         }
     };
@@ -1697,7 +1719,7 @@ mod tests {
         let adj = Adjacency::new(&cup);
         let own = pair_rows(&cup, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
         assert_eq!(own.weight[1], 1.0, "closest point of the first edge: v1");
-        let ext = extended_row(&cup, &x, &own, &adj).expect("a cup: extended");
+        let ext = extended_row(&cup, &x, &own, &adj, false).expect("a cup: extended");
         assert!((ext.distance - 0.4).abs() < 1e-12, "{}", ext.distance);
         assert!((ext.weight[0] + 0.5).abs() < 1e-12 && (ext.weight[1] - 1.5).abs() < 1e-12);
         assert!(is_extended(&ext) && !is_extended(&own));
@@ -1711,23 +1733,23 @@ mod tests {
         let xr = ridge.x_ref.clone();
         let own = pair_rows(&ridge, &xr, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
         assert_eq!(own.weight[1], 1.0);
-        assert!(extended_row(&ridge, &xr, &own, &Adjacency::new(&ridge)).is_none());
+        assert!(extended_row(&ridge, &xr, &own, &Adjacency::new(&ridge), false).is_none());
         // past the chain's end: v3 at x = 2, beyond v2 (x = 1)
         let mut past = x.clone();
         past[6] = 2.0;
         past[7] = 1.5;
         let own = pair_rows(&cup, &past, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
-        assert!(extended_row(&cup, &past, &own, &adj).is_none());
+        assert!(extended_row(&cup, &past, &own, &adj, false).is_none());
         // a solid's edge faced from inside: a triangle (v0, v1, v4) on v3's side of the line
         let mut solid = cup.clone();
         solid.triangles = vec![[0, 1, 4]];
         let own = pair_rows(&solid, &x, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
-        assert!(extended_row(&solid, &x, &own, &Adjacency::new(&solid)).is_none());
+        assert!(extended_row(&solid, &x, &own, &Adjacency::new(&solid), false).is_none());
         // faced from outside: the triangle's third vertex (v4 moved to (0.5, −1)) beyond the line
         solid.x_ref[9] = -1.0;
         let xs = solid.x_ref.clone();
         let own = pair_rows(&solid, &xs, ContactPair::PointEdge { x: 3, a: 0 }).unwrap();
-        assert!(extended_row(&solid, &xs, &own, &Adjacency::new(&solid)).is_some());
+        assert!(extended_row(&solid, &xs, &own, &Adjacency::new(&solid), false).is_some());
     }
 
     /// 3D curves: an edge crossing above the extension of the first of two edges that turn up
@@ -1742,14 +1764,14 @@ mod tests {
         let adj = Adjacency::new(&cup);
         let own = pair_rows(&cup, &x_ref, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
         assert!(!interior_row(&own));
-        let ext = extended_row(&cup, &x_ref, &own, &adj).expect("a cup: extended");
+        let ext = extended_row(&cup, &x_ref, &own, &adj, false).expect("a cup: extended");
         assert!((ext.distance - 0.7).abs() < 1e-12, "{}", ext.distance);
         assert!((linear_value(&ext, &x_ref) - 0.7).abs() < 1e-12);
         assert!(ext.distance <= own.distance);
         x_ref[8] = -0.5;
         let ridge = two_curves(3, x_ref.clone());
         let own = pair_rows(&ridge, &x_ref, ContactPair::EdgeEdge { a: 0, b: 2 }).unwrap();
-        assert!(extended_row(&ridge, &x_ref, &own, &Adjacency::new(&ridge)).is_none());
+        assert!(extended_row(&ridge, &x_ref, &own, &Adjacency::new(&ridge), false).is_none());
     }
 
     /// 2D: a vertex whose closest point on an edge of the other body is that body's vertex v is
@@ -1797,6 +1819,60 @@ mod tests {
             rules(false, true),
             &adj
         ));
+    }
+
+    /// The chain test of an extended row walks at most [`EXTEND_CHAIN`] edges past the
+    /// boundary, except, with `fixed_unlimited`, along a fixed element: a vertex above a
+    /// parabola, its closest point on the first edge that edge's end, the foot on the extension
+    /// six edges further.
+    #[test]
+    fn a_fixed_element_is_extended_past_the_chain_limit() {
+        use crate::scene::mesh::{Body, BodyKind};
+        // lower: v0 … v7 at (i, 0.05 i²); upper: v8 (6.5, 2.2125), v9 (6.5, 3)
+        let mut x_ref: Vec<f64> = (0..8)
+            .flat_map(|i| [i as f64, 0.05 * (i * i) as f64])
+            .collect();
+        x_ref.extend_from_slice(&[6.5, 2.2125, 6.5, 3.0]);
+        let mut edges: Vec<[usize; 2]> = (0..7).map(|i| [i, i + 1]).collect();
+        edges.push([8, 9]);
+        let curve = |name: &str, vertices: Vec<usize>, edges: Vec<usize>| Body {
+            name: name.into(),
+            kind: BodyKind::Curve,
+            h: 1.0,
+            vertices,
+            edges,
+            ..Default::default()
+        };
+        let mut mesh = Mesh {
+            dim: 2,
+            x_ref: x_ref.clone(),
+            fixed: vec![false; 10],
+            edges,
+            edge_body: vec![0, 0, 0, 0, 0, 0, 0, 1],
+            bodies: vec![
+                curve("lower", (0..8).collect(), (0..7).collect()),
+                curve("upper", vec![8, 9], vec![7]),
+            ],
+            ..Default::default()
+        };
+        let adj = Adjacency::new(&mesh);
+        let own = pair_rows(&mesh, &x_ref, ContactPair::PointEdge { x: 8, a: 0 }).unwrap();
+        assert_eq!(own.weight[1], 1.0, "closest point of the first edge: v1");
+        // a moving lower curve: not taken, with or without the option
+        assert!(extended_row(&mesh, &x_ref, &own, &adj, false).is_none());
+        assert!(extended_row(&mesh, &x_ref, &own, &adj, true).is_none());
+        // a fixed one: taken with the option only, at the distance to the line y = 0.05 x
+        for v in 0..8 {
+            mesh.fixed[v] = true;
+        }
+        assert!(extended_row(&mesh, &x_ref, &own, &adj, false).is_none());
+        let ext = extended_row(&mesh, &x_ref, &own, &adj, true).expect("fixed: extended");
+        let line = (2.2125 - 0.05 * 6.5) / (1.0f64 + 0.0025).sqrt();
+        assert!(
+            (ext.distance - line).abs() < 1e-12,
+            "{} against {line}",
+            ext.distance
+        );
     }
 
     /// 2D: a vertex of a curved body against the side of the other body's corner passing over

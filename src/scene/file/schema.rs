@@ -56,6 +56,9 @@ pub struct SolverSpec {
     /// SQP, 2D: leave out a vertex's row against the side of a corner that the corner's row
     /// implies (used with `outer_method = "sqp"`).
     pub sqp_drop_side_rows: Option<bool>,
+    /// SQP: the extended rows against a fixed element without the chain limit (used with
+    /// `sqp_extend_rows = true`).
+    pub sqp_extend_fixed: Option<bool>,
     /// SQP: add a violated row only where the pair comes within ε + δ on the step's straight
     /// path (used with `outer_method = "sqp"`).
     pub sqp_path_rows: Option<bool>,
