@@ -372,16 +372,17 @@ fn every_row_option(settings: &mut OuterSettings) {
     settings.sqp.implying_rows = true;
 }
 
-/// The side rows (`--sqp-drop-side-rows`, 2D) on the bowl of `experiments/sliding2d.py` (level
-/// 1, the block started 30° up the bowl: `tests/data/bowl_l1_t30.toml`): with every other row
-/// option, the run with the side rows left out reaches the same energy (the bowl's two lowest
-/// states are mirror images, equal in J) in fewer outer steps, every iterate checked by the
-/// all-pairs distance and both certified.
-#[test]
-fn side_rows_shorten_the_slide_down_the_bowl() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bowl_l1_t30.toml");
-    let scene = contactlab::scene::file::load(&path).unwrap().scene;
-    let rows = SqpSettings {
+/// The bowl of `experiments/sliding2d.py` at `level`, the block started 30° up the bowl
+/// (`tests/data/bowl_l{level}_t30.toml`).
+fn bowl(level: usize) -> contactlab::scene::Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("tests/data/bowl_l{level}_t30.toml"));
+    contactlab::scene::file::load(&path).unwrap().scene
+}
+
+/// SQP with every row option, then `more` on top.
+fn row_options(more: impl Fn(&mut SqpSettings)) -> OuterSettings {
+    let mut sqp = SqpSettings {
         drop_endpoint_rows: true,
         extend_rows: true,
         drop_vertex_rows: true,
@@ -389,62 +390,71 @@ fn side_rows_shorten_the_slide_down_the_bowl() {
         implying_rows: true,
         ..SqpSettings::default()
     };
-    let with_side = |drop_side_rows: bool| OuterSettings {
-        sqp: SqpSettings {
-            drop_side_rows,
-            ..rows.clone()
-        },
+    more(&mut sqp);
+    OuterSettings {
+        sqp,
         ..sqp_settings()
-    };
-    let (every, _) = certified_run_of(&scene, &with_side(false), "rows");
-    let (side, _) = certified_run_of(&scene, &with_side(true), "rows, side rows left out");
+    }
+}
+
+/// Runs `scene` with `before` and `after` (each a label and settings), both certified with
+/// every iterate checked; asserts the same energy (1e-8 relative) and fewer outer steps after.
+fn same_energy_in_fewer_steps(
+    scene: &contactlab::scene::Scene,
+    before: (&str, OuterSettings),
+    after: (&str, OuterSettings),
+) {
+    let (a, _) = certified_run_of(scene, &before.1, before.0);
+    let (b, _) = certified_run_of(scene, &after.1, after.0);
     assert!(
-        (side.energy - every.energy).abs() <= 1e-8 * every.energy.abs(),
-        "J {} against {}",
-        side.energy,
-        every.energy
+        (b.energy - a.energy).abs() <= 1e-8 * a.energy.abs(),
+        "J {} ({}) against {} ({})",
+        b.energy,
+        after.0,
+        a.energy,
+        before.0
     );
     assert!(
-        side.outer_iterations < every.outer_iterations,
-        "{} outer steps with the side rows left out, {} with them",
-        side.outer_iterations,
-        every.outer_iterations
+        b.outer_iterations < a.outer_iterations,
+        "{} outer steps with {}, {} with {}",
+        b.outer_iterations,
+        after.0,
+        a.outer_iterations,
+        before.0
+    );
+}
+
+/// The side rows (`--sqp-drop-side-rows`, 2D) on the bowl at level 1: with every other row
+/// option, the run with the side rows left out reaches the same energy (the bowl's two lowest
+/// states are mirror images, equal in J) in fewer outer steps (measured 13 against 21), every
+/// iterate checked by the all-pairs distance and both certified.
+#[test]
+fn side_rows_shorten_the_slide_down_the_bowl() {
+    same_energy_in_fewer_steps(
+        &bowl(1),
+        ("the rows", row_options(|_| {})),
+        (
+            "the side rows left out",
+            row_options(|s| s.drop_side_rows = true),
+        ),
     );
 }
 
 /// The extended rows against a fixed element without the chain limit (`--sqp-extend-fixed`) on
-/// the bowl at level 3 (`tests/data/bowl_l3_t30.toml`), with every other row option and the
-/// side rows: the same energy, certified, every iterate checked by the all-pairs distance, in
-/// fewer outer steps than with the limit (measured 21 against 29).
+/// the bowl at level 3, with every other row option and the side rows: the same energy,
+/// certified, every iterate checked, in fewer outer steps than with the limit (measured 21
+/// against 29).
 #[test]
 fn extended_rows_along_the_fixed_bowl_shorten_the_slide() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bowl_l3_t30.toml");
-    let scene = contactlab::scene::file::load(&path).unwrap().scene;
-    let with_fixed = |extend_fixed: bool| OuterSettings {
-        sqp: SqpSettings {
-            drop_endpoint_rows: true,
-            extend_rows: true,
-            drop_vertex_rows: true,
-            drop_side_rows: true,
-            path_rows: true,
-            implying_rows: true,
-            extend_fixed,
-            ..SqpSettings::default()
-        },
-        ..sqp_settings()
-    };
-    let (limited, _) = certified_run_of(&scene, &with_fixed(false), "chain limit");
-    let (fixed, _) = certified_run_of(&scene, &with_fixed(true), "fixed bowl unlimited");
-    assert!(
-        (fixed.energy - limited.energy).abs() <= 1e-8 * limited.energy.abs(),
-        "J {} against {}",
-        fixed.energy,
-        limited.energy
-    );
-    assert!(
-        fixed.outer_iterations < limited.outer_iterations,
-        "{} outer steps without the limit along the bowl, {} with it",
-        fixed.outer_iterations,
-        limited.outer_iterations
+    same_energy_in_fewer_steps(
+        &bowl(3),
+        ("the chain limit", row_options(|s| s.drop_side_rows = true)),
+        (
+            "the fixed bowl extended without it",
+            row_options(|s| {
+                s.drop_side_rows = true;
+                s.extend_fixed = true;
+            }),
+        ),
     );
 }
