@@ -332,9 +332,10 @@ fn combined_sqp_options_reach_the_asymmetric_minimum_in_fifty_steps() {
 }
 
 /// `--sqp-curvature auto` on a scene without a gas (`rod` n = 8, every row option, normal
-/// stiffness 0.01 given): neither the curvature nor the stiffness enters, so the run is the
-/// one without them, bit for bit, and not the slower one with `interior` and the stiffness
-/// (measured: 16 steps against 61 at ε = h/10, `results/sqp_combined.csv`).
+/// stiffness 0.01 and extrapolation K = 3 given): neither the curvature, nor the stiffness,
+/// nor the extrapolation enters, so the run is the one without them, bit for bit, and not the
+/// slower ones with `interior` and the stiffness or with the extrapolation (measured: 16 steps
+/// against 61 and 39 at ε = h/10, `results/sqp_combined.csv`).
 #[test]
 fn auto_curvature_leaves_a_scene_without_a_gas_as_it_is() {
     use contactlab::scene::rod::{build, RodParams};
@@ -343,24 +344,37 @@ fn auto_curvature_leaves_a_scene_without_a_gas_as_it_is() {
         ..Default::default()
     })
     .unwrap();
-    let run_with = |curvature: Curvature, gamma: f64| -> RunResult {
+    let run_with = |curvature: Curvature, gamma: f64, k: usize| -> RunResult {
         let mut settings = sqp_settings();
         every_row_option(&mut settings);
         settings.sqp.curvature = curvature;
         settings.sqp.normal_stiffness = gamma;
-        certified_run_of(&scene, &settings, &format!("{curvature:?}, γ {gamma}")).0
+        settings.sqp.extrapolate = k;
+        certified_run_of(
+            &scene,
+            &settings,
+            &format!("{curvature:?}, γ {gamma}, K {k}"),
+        )
+        .0
     };
-    let (off, auto, interior) = (
-        run_with(Curvature::Off, 0.0),
-        run_with(Curvature::Auto, 0.01),
-        run_with(Curvature::Interior, 0.01),
-    );
-    assert_eq!(auto.outer_iterations, off.outer_iterations);
-    assert_eq!(auto.energy.to_bits(), off.energy.to_bits());
+    let off = run_with(Curvature::Off, 0.0, 0);
+    let bits = |r: &RunResult| (r.outer_iterations, r.energy.to_bits());
+    for (gamma, k) in [(0.01, 0), (0.01, 3)] {
+        assert_eq!(
+            bits(&run_with(Curvature::Auto, gamma, k)),
+            bits(&off),
+            "γ {gamma}, K {k}"
+        );
+    }
     assert_ne!(
-        (interior.outer_iterations, interior.energy.to_bits()),
-        (off.outer_iterations, off.energy.to_bits()),
+        bits(&run_with(Curvature::Interior, 0.01, 0)),
+        bits(&off),
         "interior with the stiffness should change the rod's run"
+    );
+    assert_ne!(
+        bits(&run_with(Curvature::Off, 0.0, 3)),
+        bits(&off),
+        "the extrapolation should change the rod's run"
     );
 }
 

@@ -97,8 +97,11 @@ pub struct RunArgs {
     pub outer_method: OuterMethod,
     /// With --outer-method sqp: the constraints' curvature −Σ μ_k ∇²d_k in the QP's Hessian:
     /// off, psd (each pair's block projected to its PSD part), full (the model's shift keeps
-    /// it convex), tangent (each block on its pair's tangent space, then projected) or interior
-    /// (full, for the pairs whose closest points are inside both elements only). docs/method.md, "The SQP outer method".
+    /// it convex), tangent (each block on its pair's tangent space, then projected), interior
+    /// (full, for the pairs whose closest points are inside both elements only) or auto
+    /// (interior, with --sqp-normal-stiffness and --sqp-extrapolate, where the energy's Newton
+    /// model is indefinite — a gas or a pressure load — and none of the three elsewhere).
+    /// docs/method.md, "The SQP outer method".
     #[arg(long, default_value_t = Curvature::default().as_str().to_string(), value_parser = parse_curvature)]
     pub sqp_curvature: String,
     /// With --outer-method sqp: γ ≥ 0, the model gets γ·max diag(H)·∇d∇dᵀ for each pair with a

@@ -252,17 +252,38 @@ impl Curvature {
 }
 
 impl SqpSettings {
-    /// The curvature mode and the normal stiffness γ in effect for an energy whose Newton model
-    /// is (`model_psd`) or is not positive semi-definite: `auto` resolved
-    /// ([`Curvature::resolve`]), and γ dropped where `auto` resolved to `off`.
-    pub fn model_terms(&self, model_psd: bool) -> (Curvature, f64) {
-        let mode = self.curvature.resolve(model_psd);
-        if self.curvature == Curvature::Auto && mode == Curvature::Off {
-            (mode, 0.0)
+    /// The curvature mode, the normal stiffness γ and the extrapolation K in effect for an
+    /// energy whose Newton model is (`model_psd`) or is not positive semi-definite: `auto`
+    /// resolved ([`Curvature::resolve`]), and γ and K dropped where `auto` resolved to `off`
+    /// (the gas settings apply where the model is indefinite only). An explicit mode keeps
+    /// both as given.
+    pub fn model_terms(&self, model_psd: bool) -> ModelTerms {
+        let curvature = self.curvature.resolve(model_psd);
+        if self.curvature == Curvature::Auto && curvature == Curvature::Off {
+            ModelTerms {
+                curvature,
+                normal_stiffness: 0.0,
+                extrapolate: 0,
+            }
         } else {
-            (mode, self.normal_stiffness)
+            ModelTerms {
+                curvature,
+                normal_stiffness: self.normal_stiffness,
+                extrapolate: self.extrapolate,
+            }
         }
     }
+}
+
+/// What [`SqpSettings::model_terms`] puts in effect for one energy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelTerms {
+    /// The constraints' curvature mode (never `auto`).
+    pub curvature: Curvature,
+    /// The normal stiffness γ.
+    pub normal_stiffness: f64,
+    /// The doublings of an accepted full step (0: none).
+    pub extrapolate: usize,
 }
 
 impl Default for SqpSettings {
@@ -1126,10 +1147,12 @@ pub(crate) fn sqp_step(
     out.t_pairs_s += tp.elapsed().as_secs_f64();
     let ta = Instant::now();
     // The constraints' curvature with the last step's multipliers (none at the first step);
-    // `auto` resolved by the energy's model, and the normal stiffness with it.
-    let (mode, gamma) = ctx
+    // `auto` resolved by the energy's model, and the normal stiffness and the extrapolation
+    // with it.
+    let terms = ctx
         .sqp
         .model_terms(ctx.energy.model_is_psd(inner.hessian_model));
+    let (mode, gamma) = (terms.curvature, terms.normal_stiffness);
     let curvature = curvature_triplets(mesh, x, col, warm, mode);
     let (base, g) = build_qp_with(
         mesh,
@@ -1383,12 +1406,13 @@ pub(crate) fn sqp_step(
         }
         t *= 0.5;
     }
-    // Extrapolation (`SqpSettings::extrapolate`): after a full step, 2, 4, … times the step
+    // Extrapolation (`SqpSettings::extrapolate`, through `model_terms`: none where `auto`
+    // resolved to `off`): after a full step, 2, 4, … times the step
     // while each is accepted and lowers J below the last accepted point; the last accepted
     // is kept. A trial that fails here does not mark the step `limited`: the full step was
     // taken.
     if out.step_length == 1.0 {
-        for k in 1..=ctx.sqp.extrapolate.min(60) {
+        for k in 1..=terms.extrapolate.min(60) {
             let t = (1u64 << k) as f64;
             let j_best = out.accepted.as_ref().map_or(jx, |a| a.1);
             match trial(t, j_best, &mut out)? {
@@ -1440,20 +1464,22 @@ mod tests {
         let with = |curvature| SqpSettings {
             curvature,
             normal_stiffness: 0.01,
+            extrapolate: 3,
             ..Default::default()
         };
+        let terms = |m: ModelTerms| (m.curvature, m.normal_stiffness, m.extrapolate);
         assert_eq!(
-            with(Curvature::Auto).model_terms(true),
-            (Curvature::Off, 0.0)
+            terms(with(Curvature::Auto).model_terms(true)),
+            (Curvature::Off, 0.0, 0)
         );
         assert_eq!(
-            with(Curvature::Auto).model_terms(false),
-            (Curvature::Interior, 0.01)
+            terms(with(Curvature::Auto).model_terms(false)),
+            (Curvature::Interior, 0.01, 3)
         );
-        // an explicit mode keeps the stiffness it was given, model or not
+        // an explicit mode keeps the stiffness and the extrapolation it was given, model or not
         assert_eq!(
-            with(Curvature::Off).model_terms(true),
-            (Curvature::Off, 0.01)
+            terms(with(Curvature::Off).model_terms(true)),
+            (Curvature::Off, 0.01, 3)
         );
     }
 
