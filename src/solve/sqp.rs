@@ -1588,6 +1588,12 @@ mod tests {
     /// Two curves of `dim`-dimensional points `x_ref`: `lower` through vertices 0, 1, 2 (edges
     /// 0 and 1, meeting at vertex 1) and `upper` through 3, 4 (edge 2).
     fn two_curves(dim: usize, x_ref: Vec<f64>) -> Mesh {
+        curves(dim, x_ref, 3)
+    }
+
+    /// Two curves of `dim`-dimensional points `x_ref`: `lower` through vertices 0 … n − 1
+    /// (edges 0 … n − 2, edge i from vertex i to i + 1) and `upper` through n, n + 1 (edge n − 1).
+    fn curves(dim: usize, x_ref: Vec<f64>, n: usize) -> Mesh {
         use crate::scene::mesh::{Body, BodyKind};
         let curve = |name: &str, vertices: Vec<usize>, edges: Vec<usize>| Body {
             name: name.into(),
@@ -1597,15 +1603,19 @@ mod tests {
             edges,
             ..Default::default()
         };
+        let mut edges: Vec<[usize; 2]> = (0..n - 1).map(|i| [i, i + 1]).collect();
+        edges.push([n, n + 1]);
+        let mut edge_body = vec![0; n - 1];
+        edge_body.push(1);
         Mesh {
             dim,
             x_ref,
-            fixed: vec![false; 5],
-            edges: vec![[0, 1], [1, 2], [3, 4]],
-            edge_body: vec![0, 0, 1],
+            fixed: vec![false; n + 2],
+            edges,
+            edge_body,
             bodies: vec![
-                curve("lower", vec![0, 1, 2], vec![0, 1]),
-                curve("upper", vec![3, 4], vec![2]),
+                curve("lower", (0..n).collect(), (0..n - 1).collect()),
+                curve("upper", vec![n, n + 1], vec![n - 1]),
             ],
             ..Default::default()
         }
@@ -1853,34 +1863,12 @@ mod tests {
     /// six edges further.
     #[test]
     fn a_fixed_element_is_extended_past_the_chain_limit() {
-        use crate::scene::mesh::{Body, BodyKind};
         // lower: v0 … v7 at (i, 0.05 i²); upper: v8 (6.5, 2.2125), v9 (6.5, 3)
         let mut x_ref: Vec<f64> = (0..8)
             .flat_map(|i| [i as f64, 0.05 * (i * i) as f64])
             .collect();
         x_ref.extend_from_slice(&[6.5, 2.2125, 6.5, 3.0]);
-        let mut edges: Vec<[usize; 2]> = (0..7).map(|i| [i, i + 1]).collect();
-        edges.push([8, 9]);
-        let curve = |name: &str, vertices: Vec<usize>, edges: Vec<usize>| Body {
-            name: name.into(),
-            kind: BodyKind::Curve,
-            h: 1.0,
-            vertices,
-            edges,
-            ..Default::default()
-        };
-        let mut mesh = Mesh {
-            dim: 2,
-            x_ref: x_ref.clone(),
-            fixed: vec![false; 10],
-            edges,
-            edge_body: vec![0, 0, 0, 0, 0, 0, 0, 1],
-            bodies: vec![
-                curve("lower", (0..8).collect(), (0..7).collect()),
-                curve("upper", vec![8, 9], vec![7]),
-            ],
-            ..Default::default()
-        };
+        let mut mesh = curves(2, x_ref.clone(), 8);
         let adj = Adjacency::new(&mesh);
         let own = pair_rows(&mesh, &x_ref, ContactPair::PointEdge { x: 8, a: 0 }).unwrap();
         assert_eq!(own.weight[1], 1.0, "closest point of the first edge: v1");
