@@ -538,6 +538,15 @@ fn scenefiles_solver_table_applies_and_flags_override_it() {
     assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted");
     assert_eq!(s["outer_method"], "pantz");
     assert_eq!(s["sqp_steps"], 0);
+    assert!(s["sqp_from"].is_null());
+    let s = summary(&["--outer-method", "auto"]);
+    assert_eq!(s["outer_method"], "auto");
+    // the SQP phase's first step, or null where Pantz's map stopped at a certified state
+    let from = &s["sqp_from"];
+    assert!(
+        from.is_null() || from.as_u64().is_some_and(|k| k >= 1),
+        "sqp_from {from}"
+    );
     let s = summary(&["--newton-model", "shifted-tight"]);
     assert_eq!(s["settings"]["inner"]["hessian_model"], "shifted-tight");
 }
@@ -771,6 +780,11 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             &["--sqp-extrapolate", "3"][..],
             "refused_ring_extrapolate",
             "--sqp-extrapolate 3 set with the pantz outer method",
+        ),
+        (
+            &["--outer-method", "auto", "--sqp-extrapolate", "3"][..],
+            "refused_ring_auto",
+            "--sqp-extrapolate 3 set with the auto outer method",
         ),
         (
             &["--outer-method", "sqp", "--sqp-implying-rows"][..],

@@ -8,7 +8,7 @@
 use contactlab::contact::min_distance_brute_force;
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::solve::outer::{run, IterationRecord, OuterSettings, RunResult, RunStatus};
-use contactlab::solve::sqp::{Curvature, OuterMethod, SqpSettings};
+use contactlab::solve::sqp::{Curvature, OuterMethod, SqpSettings, AUTO_PANTZ_STEPS};
 use contactlab_solvers::{backend_from_name, default_settings};
 
 /// The asymmetric balloons (heights 0.9, 0.2, 0.9, 0.2) at `n`.
@@ -470,5 +470,81 @@ fn extended_rows_along_the_fixed_bowl_shorten_the_slide() {
                 s.extend_fixed = true;
             }),
         ),
+    );
+}
+
+/// `auto` where Pantz's map converges (the balloons from the symmetric start, n = 40: 3 outer
+/// steps, certified): the run is Pantz's bit for bit (its polish and certificate computed once,
+/// where Pantz's map stopped), and no SQP step is taken.
+#[test]
+fn auto_is_pantz_where_pantz_converges() {
+    let scene = build(&BalloonsParams {
+        n: 40,
+        ..Default::default()
+    })
+    .unwrap();
+    let with = |method: OuterMethod| {
+        let settings = OuterSettings {
+            method,
+            ..Default::default()
+        };
+        certified_run_of(&scene, &settings, method.as_str())
+    };
+    let (pantz, pantz_records) = with(OuterMethod::Pantz);
+    let (auto, auto_records) = with(OuterMethod::Auto);
+    assert_eq!(auto.sqp_from, None);
+    assert_eq!(auto.sqp_steps + auto.fallback_steps, 0);
+    let bits = |r: &RunResult| {
+        (
+            r.outer_iterations,
+            r.inner_iterations,
+            r.energy.to_bits(),
+            r.certificate.kappa.to_bits(),
+            r.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+        )
+    };
+    assert_eq!(bits(&auto), bits(&pantz));
+    let energies =
+        |rs: &[IterationRecord]| rs.iter().map(|r| r.energy.to_bits()).collect::<Vec<_>>();
+    assert_eq!(energies(&auto_records), energies(&pantz_records));
+}
+
+/// `auto` where Pantz's map creeps (the asymmetric balloons n = 40, where it stops at a fixed
+/// point that is not a minimum after 69 steps, κ 5.5e-3, `results/sliding.csv`): the first 10
+/// steps are Pantz's, the SQP method with the one command line's settings takes over at step
+/// 11, and the run ends certified below Pantz's state, every iterate checked by the all-pairs
+/// distance and J non-increasing.
+#[test]
+fn auto_hands_a_creeping_run_to_the_sqp_method() {
+    let (auto, records) = checked_run(40, OuterMethod::Auto);
+    let (pantz, pantz_records) = checked_run(40, OuterMethod::Pantz);
+    assert!(pantz.outer_iterations > AUTO_PANTZ_STEPS);
+    assert_eq!(auto.sqp_from, Some(AUTO_PANTZ_STEPS + 1));
+    assert_eq!(
+        auto.status,
+        RunStatus::Converged,
+        "κ {:e}",
+        auto.certificate.kappa
+    );
+    assert_ne!(pantz.status, RunStatus::Converged);
+    // the first steps are Pantz's own
+    let energies =
+        |rs: &[IterationRecord]| rs.iter().map(|r| r.energy.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        energies(&records[..=AUTO_PANTZ_STEPS]),
+        energies(&pantz_records[..=AUTO_PANTZ_STEPS])
+    );
+    assert!(records[AUTO_PANTZ_STEPS + 1..]
+        .iter()
+        .all(|r| r.step == "sqp" || r.step == "fallback"));
+    assert_eq!(
+        auto.sqp_steps + auto.fallback_steps,
+        auto.outer_iterations - AUTO_PANTZ_STEPS
+    );
+    assert!(
+        auto.energy < pantz.energy - 1e-3,
+        "auto J = {} vs pantz J = {}",
+        auto.energy,
+        pantz.energy
     );
 }

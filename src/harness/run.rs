@@ -306,7 +306,7 @@ struct Summary {
     eps: f64,
     backend: String,
     pruning: &'static str,
-    /// The outer method (`pantz`, `sqp`).
+    /// The outer method (`pantz`, `sqp`, `auto`).
     outer_method: &'static str,
     status: &'static str,
     outer_iterations: usize,
@@ -314,6 +314,9 @@ struct Summary {
     sqp_steps: usize,
     /// Outer steps where the SQP step collapsed and Pantz's step was taken (0 for `pantz`).
     fallback_steps: usize,
+    /// `auto`: the first outer step of its SQP phase (`null`: Pantz's map throughout, or
+    /// another method).
+    sqp_from: Option<usize>,
     /// The backend tolerance the SQP method tightened to for its certificate (`null` where it
     /// kept `qp_tol`).
     qp_tol_tightened: Option<f64>,
@@ -521,7 +524,8 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, --sqp-extend-fixed, \
                  --sqp-drop-vertex-rows, --sqp-drop-side-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
-                 or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only",
+                 or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only \
+                 (auto's SQP phase takes the one command line's, docs/method.md)",
                 set.join(" and "),
                 settings.outer_method.as_str()
             );
@@ -842,6 +846,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         outer_iterations: res.outer_iterations,
         sqp_steps: res.sqp_steps,
         fallback_steps: res.fallback_steps,
+        sqp_from: res.sqp_from,
         qp_tol_tightened: res.qp_tol_tightened,
         inner_iterations: res.inner_iterations,
         backend_iterations: res.backend_iterations,
@@ -871,8 +876,14 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
-        if method == OuterMethod::Sqp {
-            format!(" ({} sqp, {} pantz fallback)", res.sqp_steps, res.fallback_steps)
+        if method.uses_sqp() {
+            format!(
+                " ({}{} sqp, {} pantz fallback)",
+                res.sqp_from
+                    .map_or(String::new(), |k| format!("sqp from step {k}: ")),
+                res.sqp_steps,
+                res.fallback_steps
+            )
         } else {
             String::new()
         },

@@ -568,7 +568,8 @@ impl BlockSettings {
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
                      sqp_drop_vertex_rows, sqp_drop_side_rows, sqp_extend_fixed, sqp_path_rows, \
                      sqp_implying_rows and \
-                     sqp_extrapolate apply to outer_method = \"sqp\" only",
+                     sqp_extrapolate apply to outer_method = \"sqp\" only (auto's SQP phase \
+                     takes the one command line's)",
                     set.join(" and "),
                     outer_method.as_str()
                 );
@@ -1306,6 +1307,16 @@ mod tests {
         assert_eq!(runs[0].case_columns().outer_method, "sqp");
         assert_eq!(runs[1].settings.outer_method, OuterMethod::Pantz);
         assert!(!runs[1].key.contains("method="), "{}", runs[1].key);
+        let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"auto\"").unwrap();
+        assert_eq!(runs[0].settings.outer_method, OuterMethod::Auto);
+        assert!(runs[0].key.ends_with("|method=auto"), "{}", runs[0].key);
+        let m = err(
+            "[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"auto\"\nsqp_extrapolate = 3",
+        );
+        assert!(
+            m.contains("sqp_extrapolate set with outer_method = \"auto\""),
+            "{m}"
+        );
         let m = err("[[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"newton\"");
         assert!(
             m.contains("outer_method \"newton\"") && m.contains("pantz, sqp"),

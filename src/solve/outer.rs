@@ -14,12 +14,14 @@ use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
 };
 use crate::contact::{MinDistance, PairSet};
-use crate::energy::Objective;
+use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{certificate, Certificate, CertificateError};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
-use crate::solve::sqp::{sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep};
+use crate::solve::sqp::{
+    sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_PANTZ_STEPS,
+};
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{
     solve_subproblem, DofMap, InnerSettings, ModelShift, RowOracle, SubproblemResult, TrustBox,
@@ -320,6 +322,9 @@ pub struct RunResult {
     pub sqp_steps: usize,
     /// Outer steps where the SQP step collapsed and Pantz's step was taken.
     pub fallback_steps: usize,
+    /// [`OuterMethod::Auto`]: the first outer step of its SQP phase (`None`: Pantz's map
+    /// throughout, or another method).
+    pub sqp_from: Option<usize>,
     /// The tightest backend tolerance the SQP method set to reach its certificate
     /// ([`SQP_TOLERANCE_RANGE`]); `None` where it kept the run's own. Where a QP failed at it,
     /// the run stopped at the state before that step.
@@ -781,6 +786,30 @@ impl Observer<OuterLoop> for FnOuter<'_> {
     }
 }
 
+/// Whether the polish step `step` from a state of energy `jx` is kept: admissible, solved, not
+/// above `jx`.
+fn polish_accepted(step: &Step, jx: f64) -> bool {
+    let sub = &step.sub;
+    step.record.admissible
+        && sub.energy <= jx
+        && sub.qp_status == QpStatus::Solved
+        && !sub.line_search_failed
+        && !sub.timed_out
+}
+
+/// [`OuterMethod::Auto`]'s SQP phase: the run's settings with [`SqpSettings::one_line`] and,
+/// where the run's Newton model is `shifted` (the default), `shifted-tight` (the one command
+/// line's; docs/method.md).
+fn auto_sqp_settings(settings: &OuterSettings) -> OuterSettings {
+    let mut s = settings.clone();
+    s.method = OuterMethod::Sqp;
+    s.sqp = SqpSettings::one_line();
+    if s.inner.hessian_model == HessianModel::Shifted {
+        s.inner.hessian_model = HessianModel::ShiftedTight;
+    }
+    s
+}
+
 /// Runs the outer loop from `x0`, calling `observer` with every record and iterate.
 pub fn run(
     mesh: &Mesh,
@@ -925,6 +954,7 @@ fn outer_loop(
         psi: Vec::new(),
         sqp_steps: 0,
         fallback_steps: 0,
+        sqp_from: None,
         qp_tol_tightened: None,
     };
     let tolerance0 = backend.tolerance();
@@ -950,6 +980,23 @@ fn outer_loop(
         deadline,
         norms: &norms,
     };
+    // `auto`: the SQP phase's settings (the one command line's) and its step context.
+    let auto = settings.method == OuterMethod::Auto;
+    let line_settings = auto.then(|| auto_sqp_settings(settings));
+    let ctx_line = line_settings
+        .as_ref()
+        .map(|s| StepContext { settings: s, ..ctx });
+    // The method of the next step, and the context it is taken in (`auto`: Pantz's, then the
+    // line's once the SQP phase has begun; its fallbacks and polish included).
+    let mut method = if auto {
+        OuterMethod::Pantz
+    } else {
+        settings.method
+    };
+    let mut cur = &ctx;
+    // `auto`: the polish and certificate computed where Pantz's map stopped at a certified
+    // state (the end of the run reuses both).
+    let mut early_polish: Option<(Step, Certificate)> = None;
     // The ψ of the last accepted step.
     let mut psi = x.clone();
     // The last step was an SQP step (its polish is about T(x) at the final x), and the
@@ -961,13 +1008,19 @@ fn outer_loop(
             result.status = RunStatus::TimeLimit;
             break;
         }
-        let step = match settings.method {
-            OuterMethod::Pantz => ctx.step(
+        if auto && method == OuterMethod::Pantz && k > AUTO_PANTZ_STEPS {
+            // Pantz's map did not stop within its steps: it creeps; the SQP method goes on.
+            method = OuterMethod::Sqp;
+            result.sqp_from = Some(k);
+            cur = ctx_line.as_ref().unwrap_or(&ctx);
+        }
+        let step = match method {
+            OuterMethod::Pantz | OuterMethod::Auto => cur.step(
                 &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
             )?,
             OuterMethod::Sqp => {
                 let (step, attempt) =
-                    ctx.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
+                    cur.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
                 if attempt.timed_out {
                     // stopped between lazy rounds: x is the last accepted iterate
                     result.status = RunStatus::TimeLimit;
@@ -982,7 +1035,7 @@ fn outer_loop(
                         st
                     }
                     _ => {
-                        let mut st = ctx.step(
+                        let mut st = cur.step(
                             &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
                         )?;
                         charge_fallback(&mut st, &attempt);
@@ -1067,6 +1120,44 @@ fn outer_loop(
         let round = 64.0 * f64::EPSILON * jx.abs();
         let tol = (settings.tol_j * e_scale).max(round);
         if !step.box_active && (jprev - jx).abs() <= tol {
+            if auto && method == OuterMethod::Pantz {
+                // Pantz's map stopped: its state is the result if the certificate holds there
+                // (after the polish, as at the end of the run), else the SQP method goes on
+                // from x (the polish's work is counted, its state dropped).
+                let polish = if settings.polish {
+                    Some(cur.step(
+                        &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+                    )?)
+                } else {
+                    None
+                };
+                let c = match polish.as_ref().filter(|p| polish_accepted(p, jx)) {
+                    Some(p) => {
+                        certify(&p.sub.y, &pair_multipliers(&p.sub.rows, &p.sub.multipliers))?
+                    }
+                    None => certify(
+                        &x,
+                        &pair_multipliers(&result.last_rows, &result.multipliers),
+                    )?,
+                };
+                if c.kappa <= settings.tol_kappa {
+                    match polish {
+                        Some(p) => early_polish = Some((p, c)),
+                        None => cert_at_x = Some(c),
+                    }
+                    stopped_by_rule = true;
+                    stalled = sub.line_search_stalled;
+                    break;
+                }
+                if let Some(p) = polish {
+                    result.inner_iterations += p.sub.inner_iterations;
+                    result.backend_iterations += p.sub.backend_iterations;
+                }
+                method = OuterMethod::Sqp;
+                result.sqp_from = Some(k + 1);
+                cur = ctx_line.as_ref().unwrap_or(&ctx);
+                continue;
+            }
             // The SQP method does not creep (docs/method.md): where its step still lowers J
             // above round-off with a step the line search did not cut below
             // SQP_ENDGAME_MIN_STEP, or is stationary only to the backend's tolerance, and the
@@ -1114,17 +1205,19 @@ fn outer_loop(
         if last_sqp {
             psi = x.clone();
         }
-        let step = ctx.step(
-            &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
-        )?;
+        let (step, early_cert) = match early_polish.take() {
+            Some((st, c)) => (st, Some(c)),
+            None => (
+                cur.step(
+                    &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+                )?,
+                None,
+            ),
+        };
+        let accepted = polish_accepted(&step, jx);
         let sub = step.sub;
         result.inner_iterations += sub.inner_iterations;
         result.backend_iterations += sub.backend_iterations;
-        let accepted = step.record.admissible
-            && sub.energy <= jx
-            && sub.qp_status == QpStatus::Solved
-            && !sub.line_search_failed
-            && !sub.timed_out;
         result.polish = Some(Polish {
             energy_change: if accepted { sub.energy - jx } else { 0.0 },
             inner_iterations: sub.inner_iterations,
@@ -1148,6 +1241,9 @@ fn outer_loop(
             result.min_distance = step.min_distance;
             result.last_rows = sub.rows;
             result.multipliers = sub.multipliers;
+        }
+        if early_cert.is_some() {
+            cert_at_x = early_cert;
         }
     }
     result.psi = psi;

@@ -89,17 +89,32 @@ pub enum OuterMethod {
     /// Steps of a sequential quadratic program on (3) with the true distances linearized at
     /// the iterate (this module), falling back to Pantz's step where they collapse.
     Sqp,
+    /// Pantz's map while it converges, then the SQP method with [`SqpSettings::one_line`]:
+    /// from the first stop of Pantz's map whose state the minimality certificate rejects, or
+    /// from outer step [`AUTO_PANTZ_STEPS`] + 1 on (docs/method.md, "Pantz's map, then SQP").
+    Auto,
 }
+
+/// `auto`: the outer steps Pantz's map is given before the SQP method takes over. Where
+/// nothing slides Pantz's map stops within a few steps (the balloons from the symmetric start:
+/// 3 outer steps at every n measured); where it takes more it creeps (ΔJ per step ~ k⁻¹).
+pub const AUTO_PANTZ_STEPS: usize = 10;
 
 impl OuterMethod {
     /// Every method.
-    pub const ALL: [OuterMethod; 2] = [OuterMethod::Pantz, OuterMethod::Sqp];
+    pub const ALL: [OuterMethod; 3] = [OuterMethod::Pantz, OuterMethod::Sqp, OuterMethod::Auto];
+
+    /// Whether the run may take SQP steps (`sqp`, `auto`).
+    pub fn uses_sqp(&self) -> bool {
+        matches!(self, OuterMethod::Sqp | OuterMethod::Auto)
+    }
 
     /// The name on the command line, in scene and sweep files, CSV and JSON.
     pub fn as_str(&self) -> &'static str {
         match self {
             OuterMethod::Pantz => "pantz",
             OuterMethod::Sqp => "sqp",
+            OuterMethod::Auto => "auto",
         }
     }
 
@@ -108,7 +123,7 @@ impl OuterMethod {
         OuterMethod::ALL.into_iter().find(|m| m.as_str() == s)
     }
 
-    /// The names, for messages: `pantz, sqp`.
+    /// The names, for messages: `pantz, sqp, auto`.
     pub fn names() -> String {
         OuterMethod::ALL.map(|m| m.as_str()).join(", ")
     }
@@ -302,6 +317,29 @@ impl Default for SqpSettings {
             path_rows: false,
             implying_rows: false,
             extrapolate: 0,
+        }
+    }
+}
+
+impl SqpSettings {
+    /// The settings of the one command line that meets the sliding targets on every scene
+    /// measured (docs/method.md, "One command line for every scene"): the seven row options,
+    /// `--sqp-curvature auto --sqp-normal-stiffness 0.1 --sqp-extrapolate 3` (with
+    /// `--newton-model shifted-tight`, an energy setting: [`crate::solve::outer`] sets it for
+    /// `auto`'s SQP phase).
+    pub fn one_line() -> SqpSettings {
+        SqpSettings {
+            curvature: Curvature::Auto,
+            normal_stiffness: 0.1,
+            drop_endpoint_rows: true,
+            extend_rows: true,
+            drop_vertex_rows: true,
+            drop_side_rows: true,
+            extend_fixed: true,
+            path_rows: true,
+            implying_rows: true,
+            extrapolate: 3,
+            ..SqpSettings::default()
         }
     }
 }
