@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The backends' agreement check: the default balloons scene (n = 40) with each backend at its
-# default tolerance; prints final energy, state and status of each, and the largest relative
+# default tolerance and Pantz's map; prints final energy, state and status of each, and the largest relative
 # energy difference. Usage: bash experiments/backends_n40.sh [N]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,7 +9,7 @@ n=${1:-40}
 [ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
 for b in clarabel ip osqp uzawa; do
-  [ -f runs/n$n-$b/summary.json ] || $bin run balloons --n "$n" --backend $b --quiet --frame-every 1000000 --out runs/n$n-$b >&2 || true
+  [ -f runs/n$n-$b/summary.json ] || $bin run balloons --n "$n" --backend $b --outer-method pantz --quiet --frame-every 1000000 --out runs/n$n-$b >&2 || true
 done
 python3 - "$n" <<'PY'
 import json, os, sys

@@ -262,6 +262,9 @@ def run(scene, out, extra=()):
     # `ip` became it), so a run that names no backend runs Clarabel.
     if "--backend" not in extra:
         extra = ["--backend", "clarabel"] + list(extra)
+    # ... and with Pantz's map (the default until `auto` became it).
+    if "--outer-method" not in extra:
+        extra = ["--outer-method", "pantz"] + list(extra)
     with open(scene) as f:
         key = f.read() + "\n#args " + " ".join(extra)
     stamp = os.path.join(out, "benchmark_input.txt")

@@ -2,7 +2,7 @@
 # results/default_backend_scenes.csv: Clarabel against `ip` (the default backend) on every
 # committed scene file, the default built-in scene, the textbook cases and the dynamic `drop`:
 # status, J, outer / inner / backend iterations, κ, QPs handed to Clarabel, wall time.
-# Each run: `contactlab run SCENE --backend B --time-limit 600 --quiet --frame-every 1000000`
+# Each run: `contactlab run SCENE --backend B --outer-method pantz --time-limit 600 --quiet --frame-every 1000000`
 # into runs/default_backend/NAME-B/ (skipped when its summary.json exists; `drop` with
 # `--dynamic`). Usage: bash experiments/default_backend_scenes.sh. Environment:
 # CONTACTLAB_BIN (default target/release/contactlab), OUT (default
@@ -31,7 +31,7 @@ for sc in "${scenes[@]}"; do
     dir=$work/$name-$b
     [ -f "$dir/summary.json" ] && continue
     echo "$name $b" >&2
-    "$bin" run "$sc" "${extra[@]}" --backend "$b" --time-limit 600 --quiet \
+    "$bin" run "$sc" "${extra[@]}" --backend "$b" --outer-method pantz --time-limit 600 --quiet \
       --frame-every 1000000 --out "$dir" >/dev/null 2>"$dir.stderr" || true
   done
 done

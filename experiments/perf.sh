@@ -10,7 +10,8 @@
 # run, default 600), OUT (default results/perf.csv), SCENES3D (default "rod sheets solids
 # balloons3d").
 #
-# Each run is `BINARY run SCENE [--n N] --quiet --frame-every 1000000 --time-limit LIMIT`
+# Each run is `BINARY run SCENE [--n N] --outer-method pantz --quiet --frame-every 1000000 --time-limit LIMIT`
+# (without --outer-method where the binary has no such flag)
 # into runs/perf/LABEL-SCENE-N/; its row holds the summary (status, J, outer/inner/backend
 # iterations, wall time) and the per-phase totals summed over history.csv (pair search,
 # assembly, backend), the QP count (inner steps + lazy re-solves), the certificate's seconds
@@ -51,8 +52,11 @@ for c in "${cases[@]}"; do
     nflag=()
     [ -z "$n" ] || nflag=(--n "$n")
     mkdir -p "$(dirname "$dir")"
+    # Pantz's map, the default until `auto` became it (older binaries have no such flag).
+    mflag=()
+    "$bin" run --help 2>/dev/null | grep -q -- --outer-method && mflag=(--outer-method pantz)
     /usr/bin/time -f "%M" -o "$dir.rss" \
-      "$bin" run "$scene" "${nflag[@]}" "${flags[@]}" --quiet --frame-every 1000000 \
+      "$bin" run "$scene" "${nflag[@]}" "${mflag[@]}" "${flags[@]}" --quiet --frame-every 1000000 \
       --time-limit "$limit" --out "$dir" >/dev/null 2>"$dir.stderr" \
       || echo "  exit $? (status in its summary if written)" >&2
   done
