@@ -3,7 +3,16 @@
 
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::solve::outer::{run, IterationRecord, OuterSettings, RunError, RunStatus};
+use contactlab::solve::sqp::OuterMethod;
 use contactlab_solvers::{backend_from_name, default_settings};
+/// The default settings with Pantz's map (these tests are about its fixed points; `auto`, the
+/// default, leaves them for the SQP method).
+fn pantz() -> OuterSettings {
+    OuterSettings {
+        method: OuterMethod::Pantz,
+        ..Default::default()
+    }
+}
 
 fn solve(backend: &str, params: &BalloonsParams) -> (f64, Vec<IterationRecord>, RunStatus, f64) {
     let scene = build(params).unwrap();
@@ -15,7 +24,7 @@ fn solve(backend: &str, params: &BalloonsParams) -> (f64, Vec<IterationRecord>, 
         scene.eps,
         &scene.x0,
         b.as_mut(),
-        &OuterSettings::default(),
+        &pantz(),
         &mut |r, _| records.push(r.clone()),
     )
     .unwrap();
@@ -107,7 +116,7 @@ fn inadmissible_start_is_refused_with_the_pair_named() {
         scene.eps,
         &scene.x0,
         b.as_mut(),
-        &OuterSettings::default(),
+        &pantz(),
         &mut |_, _| {},
     )
     .unwrap_err();

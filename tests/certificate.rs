@@ -13,10 +13,19 @@ use contactlab::scene::Scene;
 use contactlab::solve::certificate::{certificate, certificate_with, Certificate, CertificatePath};
 use contactlab::solve::h1::H1Norms;
 use contactlab::solve::outer::{certificate_active_tol, run, OuterSettings, RunResult, RunStatus};
+use contactlab::solve::sqp::OuterMethod;
 use contactlab_solvers::{
     backend_from_name, default_settings, CERTIFICATE_BACKEND, CERTIFICATE_TOL,
 };
 use std::collections::HashMap;
+/// The default settings with Pantz's map (these tests are about its fixed points; `auto`, the
+/// default, leaves them for the SQP method).
+fn pantz() -> OuterSettings {
+    OuterSettings {
+        method: OuterMethod::Pantz,
+        ..Default::default()
+    }
+}
 
 fn solve(
     mesh: &Mesh,
@@ -42,13 +51,7 @@ fn balloons(n: usize, heights: [f64; 4]) -> (Scene, RunResult) {
         ..Default::default()
     })
     .unwrap();
-    let (res, _) = solve(
-        &scene.mesh,
-        &scene.energy,
-        scene.eps,
-        &scene.x0,
-        &OuterSettings::default(),
-    );
+    let (res, _) = solve(&scene.mesh, &scene.energy, scene.eps, &scene.x0, &pantz());
     (scene, res)
 }
 
@@ -143,13 +146,7 @@ fn certificate_is_round_off_at_a_known_minimum_and_one_where_nothing_holds_the_l
     assert!(c.kappa > 0.01 && c.kappa < 0.5f64.sqrt(), "κ = {}", c.kappa);
     // The outer loop from a height of 0.5 ends on the floor, certified.
     let (mesh, energy, _) = bar_on_floor(0.5, 0.5);
-    let (res, _) = solve(
-        &mesh,
-        &energy,
-        eps,
-        &mesh.x_ref.clone(),
-        &OuterSettings::default(),
-    );
+    let (res, _) = solve(&mesh, &energy, eps, &mesh.x_ref.clone(), &pantz());
     assert_eq!(res.status, RunStatus::Converged);
     assert!(
         res.certificate.kappa <= 1e-15,
@@ -197,7 +194,7 @@ fn certificate_of_a_minimum_without_contact_is_measured_against_the_terms_forces
     // over noise (≈ 1). The scale is the terms' forces (the weight, the tension), which do
     // not vanish.
     let (mesh, energy, x0) = hanging_string(16);
-    let (res, _) = solve(&mesh, &energy, 0.01, &x0, &OuterSettings::default());
+    let (res, _) = solve(&mesh, &energy, 0.01, &x0, &pantz());
     let c = &res.certificate;
     assert_eq!(res.status, RunStatus::Converged, "{c:?}");
     assert_eq!(c.pairs, 0);
@@ -331,7 +328,7 @@ fn stopping_rule_does_not_depend_on_the_units() {
     let scene = rod::build(&RodParams::default()).unwrap();
     let s0 = OuterSettings {
         qp_in_run_units: true,
-        ..Default::default()
+        ..pantz()
     };
     let (res, j) = solve(&scene.mesh, &scene.energy, scene.eps, &scene.x0, &s0);
     let (e, l) = (2f64.powi(-20), 2f64.powi(-3));
@@ -413,7 +410,7 @@ fn certificate_paths_agree_on_real_states() {
     // small. At a minimum κ is at the noise floor of the least-squares problem (about 1e-8
     // on the balloons): both residuals are upper bounds at that floor, measured within
     // 3e-8 of S of each other up to n = 1600, asserted within 1e-7 (tol_κ is 1e-5).
-    let settings = OuterSettings::default();
+    let settings = pantz();
     let mut states: Vec<(String, Scene, RunResult)> = Vec::new();
     for (name, heights) in [
         ("symmetric", [0.2; 4]),

@@ -11,6 +11,7 @@ use contactlab::scene::solids::{self, SolidsParams};
 use contactlab::scene::Scene;
 use contactlab::solve::outer::{run, OuterSettings, Pruning, RunStatus, TrustSettings};
 use contactlab::solve::settings::{tol_kappa, Accuracy};
+use contactlab::solve::sqp::OuterMethod;
 use contactlab_solvers::backend_from_name;
 use std::process::Command;
 
@@ -38,6 +39,7 @@ fn checked_run(
         OuterSettings {
             max_outer,
             pruning,
+            method: OuterMethod::Pantz,
             ..Default::default()
         },
     )
@@ -181,6 +183,7 @@ fn trust_region_3d_iterates_pass_the_all_pairs_check() {
                     ..Default::default()
                 },
                 max_outer: 100,
+                method: OuterMethod::Pantz,
                 ..Default::default()
             },
         );
@@ -231,7 +234,7 @@ fn run_directory_of_a_3d_scene() {
     for (scene, cells) in [("solids", "10"), ("rod", "3")] {
         let out = dir.join(scene);
         let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-            .args(["run", scene, "--quiet", "--out"])
+            .args(["run", scene, "--outer-method", "pantz", "--quiet", "--out"])
             .arg(&out)
             .output()
             .unwrap();

@@ -737,27 +737,32 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
     // the built-in scenes, from the command line: each SQP setting refused with pantz
     for (flags, out, needle) in [
         (
-            &["--sqp-curvature", "full"][..],
+            &["--outer-method", "pantz", "--sqp-curvature", "full"][..],
             "refused_ring",
             "--sqp-curvature full set with the pantz outer method",
         ),
         (
-            &["--sqp-drop-endpoint-rows"][..],
+            &["--outer-method", "pantz", "--sqp-drop-endpoint-rows"][..],
             "refused_ring_drop",
             "--sqp-drop-endpoint-rows set with the pantz outer method",
         ),
         (
-            &["--sqp-extend-rows"][..],
+            &["--outer-method", "pantz", "--sqp-extend-rows"][..],
             "refused_ring_extend",
             "--sqp-extend-rows set with the pantz outer method",
         ),
         (
-            &["--sqp-drop-vertex-rows", "true"][..],
+            &["--outer-method", "pantz", "--sqp-drop-vertex-rows", "true"][..],
             "refused_ring_vertex",
             "--sqp-drop-vertex-rows set with the pantz outer method",
         ),
         (
-            &["--sqp-extend-rows", "--sqp-extend-fixed"][..],
+            &[
+                "--outer-method",
+                "pantz",
+                "--sqp-extend-rows",
+                "--sqp-extend-fixed",
+            ][..],
             "refused_ring_extend_fixed",
             "--sqp-extend-rows and --sqp-extend-fixed set with the pantz outer method",
         ),
@@ -767,17 +772,17 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             "--sqp-extend-fixed set without --sqp-extend-rows",
         ),
         (
-            &["--sqp-drop-side-rows"][..],
+            &["--outer-method", "pantz", "--sqp-drop-side-rows"][..],
             "refused_ring_side",
             "--sqp-drop-side-rows set with the pantz outer method",
         ),
         (
-            &["--sqp-path-rows"][..],
+            &["--outer-method", "pantz", "--sqp-path-rows"][..],
             "refused_ring_path",
             "--sqp-path-rows set with the pantz outer method",
         ),
         (
-            &["--sqp-extrapolate", "3"][..],
+            &["--outer-method", "pantz", "--sqp-extrapolate", "3"][..],
             "refused_ring_extrapolate",
             "--sqp-extrapolate 3 set with the pantz outer method",
         ),

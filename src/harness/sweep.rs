@@ -1283,20 +1283,26 @@ mod tests {
         // max_inner enters the settings and the key only when given
         let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\nmax_inner = 1").unwrap();
         assert_eq!(runs[0].settings.max_inner, Some(1));
-        assert!(runs[0].key.ends_with("|inner=1"), "{}", runs[0].key);
+        assert!(
+            runs[0].key.ends_with("|inner=1|method=auto"),
+            "{}",
+            runs[0].key
+        );
         assert!(runs[0].settings.time_limit_s.is_none() && !runs[0].key.contains("limit="));
         // so does time_limit_s; a bad one, or one on a dynamic block, is an error naming it
         let runs = parse("[[scene]]\nname = \"ring\"\nn = [20]\ntime_limit_s = 2.5").unwrap();
         assert_eq!(runs[0].settings.time_limit_s, Some(2.5));
-        assert!(runs[0].key.ends_with("|limit=2.5s"), "{}", runs[0].key);
+        assert!(runs[0].key.contains("|limit=2.5s|"), "{}", runs[0].key);
         let err = |s: &str| format!("{:#}", parse(s).expect_err("should fail"));
         let m = err("[[scene]]\nname = \"ring\"\nn = [20]\ntime_limit_s = 0");
         assert!(m.contains("time_limit_s = 0 must be > 0"), "{m}");
         let m = err("[[scene]]\nname = \"drop\"\ndynamic = true\ntime_limit_s = 5");
         assert!(m.contains("static runs only"), "{m}");
-        // outer_method: pantz (the default) leaves the key as it was, sqp is named in it, a
-        // block overrides the defaults, an unknown name is an error naming the choices
-        assert!(runs[0].settings.outer_method == OuterMethod::Pantz);
+        // outer_method: auto (the default) and sqp are named in the key, pantz leaves the key
+        // as it was, a block overrides the defaults, an unknown name is an error naming the
+        // choices
+        assert!(runs[0].settings.outer_method == OuterMethod::Auto);
+        assert!(runs[0].key.ends_with("|method=auto"), "{}", runs[0].key);
         let runs = parse(
             "[defaults]\nouter_method = \"sqp\"\n[[scene]]\nname = \"ring\"\nn = [20]\n\
              [[scene]]\nname = \"ring\"\nn = [20]\nouter_method = \"pantz\"",
@@ -1342,10 +1348,12 @@ mod tests {
                 (s.sqp_curvature, s.sqp_normal_stiffness),
                 (Curvature::Off, 0.0)
             );
+            // a block without outer_method runs auto, the default, named in the key (a key
+            // without a method names Pantz's run, as before auto became the default)
             let want = if extra.contains("sqp\"") {
                 format!("{plain}|method=sqp")
             } else {
-                plain.to_string()
+                format!("{plain}|method=auto")
             };
             assert_eq!(runs[0].key, want, "{extra:?}");
             let o = case::outer_settings(s);
@@ -1418,7 +1426,7 @@ mod tests {
         assert_eq!(runs[0].key, format!("{plain}|method=sqp|drop-side-rows"));
         let err = ring("sqp_drop_side_rows = true").err().unwrap().to_string();
         assert!(
-            err.contains("sqp_drop_side_rows set with outer_method = \"pantz\""),
+            err.contains("sqp_drop_side_rows set with outer_method = \"auto\""),
             "{err}"
         );
         let err = ring("outer_method = \"sqp\"\nsqp_implying_rows = true")
@@ -1431,7 +1439,7 @@ mod tests {
         );
         let err = ring("sqp_path_rows = true").err().unwrap().to_string();
         assert!(
-            err.contains("sqp_path_rows set with outer_method = \"pantz\""),
+            err.contains("sqp_path_rows set with outer_method = \"auto\""),
             "{err}"
         );
         // the extrapolation: in the outer settings and the key (after the row options)
@@ -1446,7 +1454,7 @@ mod tests {
         assert_eq!(runs[0].key, format!("{plain}|method=sqp"));
         let err = ring("sqp_extrapolate = 2").err().unwrap().to_string();
         assert!(
-            err.contains("sqp_extrapolate set with outer_method = \"pantz\""),
+            err.contains("sqp_extrapolate set with outer_method = \"auto\""),
             "{err}"
         );
         // a block overrides the defaults, key by key
@@ -1520,21 +1528,22 @@ mod tests {
                 "{m}"
             );
         }
-        // with pantz (given, or the default) they are an error naming the key and sqp
-        for extra in [
-            "outer_method = \"pantz\"\nsqp_curvature = \"psd\"",
-            "sqp_curvature = \"psd\"",
+        // with pantz or auto (given, or the default) they are an error naming the key and sqp
+        for (extra, method) in [
+            ("outer_method = \"pantz\"\nsqp_curvature = \"psd\"", "pantz"),
+            ("sqp_curvature = \"psd\"", "auto"),
         ] {
             let m = err(extra);
             assert!(
-                m.contains("scene block 1 (ring): sqp_curvature set with outer_method = \"pantz\"")
-                    && m.contains("apply to outer_method = \"sqp\" only"),
+                m.contains(&format!(
+                    "scene block 1 (ring): sqp_curvature set with outer_method = \"{method}\""
+                )) && m.contains("apply to outer_method = \"sqp\" only"),
                 "{m}"
             );
         }
         let m = err("sqp_normal_stiffness = 0.01");
         assert!(
-            m.contains("sqp_normal_stiffness set with outer_method = \"pantz\""),
+            m.contains("sqp_normal_stiffness set with outer_method = \"auto\""),
             "{m}"
         );
         // the defaults' sqp settings with a block that goes back to pantz
@@ -1659,7 +1668,7 @@ mod tests {
         assert_eq!(
             runs[0].key,
             format!(
-                "collide|n=16|eps=0.1*h^1.0||dt=0.01|steps=4|euler|{DEFAULT_BACKEND}|default|lazy|tolj=preset|max=2000"
+                "collide|n=16|eps=0.1*h^1.0||dt=0.01|steps=4|euler|{DEFAULT_BACKEND}|default|lazy|tolj=preset|max=2000|method=auto"
             )
         );
         assert!(runs.iter().all(|r| r.dynamic.is_some()));

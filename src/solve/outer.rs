@@ -20,7 +20,7 @@ use crate::solve::certificate::{certificate, Certificate, CertificateError};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::sqp::{
-    sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_PANTZ_STEPS,
+    sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_CREEP_RATIO, AUTO_PANTZ_STEPS,
 };
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{
@@ -994,6 +994,8 @@ fn outer_loop(
         settings.method
     };
     let mut cur = &ctx;
+    // The decreases of J of the last two steps (NaN before them: no comparison holds).
+    let mut decreases = [f64::NAN; 2];
     // `auto`: the polish and certificate computed where Pantz's map stopped at a certified
     // state (the end of the run reuses both).
     let mut early_polish: Option<(Step, Certificate)> = None;
@@ -1008,8 +1010,10 @@ fn outer_loop(
             result.status = RunStatus::TimeLimit;
             break;
         }
-        if auto && method == OuterMethod::Pantz && k > AUTO_PANTZ_STEPS {
-            // Pantz's map did not stop within its steps: it creeps; the SQP method goes on.
+        let creeps = decreases[1] > AUTO_CREEP_RATIO * decreases[0];
+        if auto && method == OuterMethod::Pantz && (k > AUTO_PANTZ_STEPS || creeps) {
+            // Pantz's map did not stop within its steps, or its decrease of J shrinks too
+            // slowly: it creeps; the SQP method goes on.
             method = OuterMethod::Sqp;
             result.sqp_from = Some(k);
             cur = ctx_line.as_ref().unwrap_or(&ctx);
@@ -1076,6 +1080,7 @@ fn outer_loop(
             break;
         }
         let jprev = jx;
+        decreases = [decreases[1], jprev - sub.energy];
         d_prev = displacements(mesh.dim, &x, &sub.y)
             .into_iter()
             .fold(0.0, f64::max)
