@@ -673,3 +673,32 @@ fn dynamics_collide_certificate_per_step_and_sqp_counts() {
         );
     }
 }
+
+/// `contactlab run collide --dynamic` with the defaults (`auto`, `ip`): every one of the 60
+/// steps is taken and certified. Before the start check took the exact check's round-off
+/// allowance, step 16 was refused: step 15 (an SQP step's end) left a pair one ulp below ε,
+/// admissible for the loop, not as the next step's start.
+#[test]
+fn dynamics_collide_default_method_certifies_every_step() {
+    let dir = std::env::temp_dir().join(format!("contactlab-collide-auto-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(["run", "collide", "--dynamic", "--quiet", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let m = &summary["metrics"];
+    assert_eq!(summary["settings"]["method"], "auto", "{summary}");
+    assert_eq!(m["steps_taken"], 60, "{m}");
+    assert_eq!(m["steps_fixed_point"], 0, "{m}");
+    assert_eq!(m["all_admissible"], true, "{m}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -878,7 +878,9 @@ fn outer_loop(
     let t0 = Instant::now();
     // The start is checked over every disjoint pair, the all-fixed ones included (once).
     let md0 = min_distance(mesh, x0, 2.0 * eps, false);
-    if md0.distance < eps {
+    // Admissible as the loop's iterates are (within the round-off allowance of the exact
+    // check): a time step starts from the last one's end state, which may sit an ulp below ε.
+    if md0.distance < eps - roundoff_allowance(x0) {
         return Err(RunError::InadmissibleStart {
             pair: md0.pair.to_string(),
             distance: md0.distance,
