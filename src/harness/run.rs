@@ -90,9 +90,11 @@ pub struct RunArgs {
     /// (every element block projected, the previous model). docs/method.md, "The Newton model".
     #[arg(long, default_value = "shifted", value_parser = parse_newton_model)]
     pub newton_model: HessianModel,
-    /// The outer method: pantz (the paper's T(ψ) steps) or sqp (steps on the linearized true
+    /// The outer method: auto (Pantz's map while it converges, then sqp with the one command
+    /// line's settings once it creeps or stops uncertified; docs/method.md, "Pantz's map, then
+    /// SQP"), pantz (the paper's T(ψ) steps throughout) or sqp (steps on the linearized true
     /// distances, with a correction, an exact and a continuous check, Pantz's step as the
-    /// fallback). docs/method.md, "The SQP outer method".
+    /// fallback; docs/method.md, "The SQP outer method").
     #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
     pub outer_method: OuterMethod,
     /// With --outer-method sqp: the constraints' curvature −Σ μ_k ∇²d_k in the QP's Hessian:

@@ -998,6 +998,8 @@ fn outer_loop(
     let mut cur = &ctx;
     // The decreases of J of the last two steps (NaN before them: no comparison holds).
     let mut decreases = [f64::NAN; 2];
+    // The steps taken so far that the trust region's box did not cut (all of them without it).
+    let mut free_steps = 0;
     // `auto`: the polish and certificate computed where Pantz's map stopped at a certified
     // state (the end of the run reuses both).
     let mut early_polish: Option<(Step, Certificate)> = None;
@@ -1013,7 +1015,7 @@ fn outer_loop(
             break;
         }
         let creeps = decreases[1] > AUTO_CREEP_RATIO * decreases[0];
-        if auto && method == OuterMethod::Pantz && (k > AUTO_PANTZ_STEPS || creeps) {
+        if auto && method == OuterMethod::Pantz && (free_steps >= AUTO_PANTZ_STEPS || creeps) {
             // Pantz's map did not stop within its steps, or its decrease of J shrinks too
             // slowly: it creeps; the SQP method goes on.
             method = OuterMethod::Sqp;
@@ -1082,7 +1084,14 @@ fn outer_loop(
             break;
         }
         let jprev = jx;
-        decreases = [decreases[1], jprev - sub.energy];
+        // A step the trust region's box cut is no evidence of creep: neither it nor the one
+        // before it is compared, and it does not count towards AUTO_PANTZ_STEPS.
+        if step.box_active {
+            decreases = [f64::NAN; 2];
+        } else {
+            decreases = [decreases[1], jprev - sub.energy];
+            free_steps += 1;
+        }
         d_prev = displacements(mesh.dim, &x, &sub.y)
             .into_iter()
             .fold(0.0, f64::max)

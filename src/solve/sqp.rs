@@ -91,7 +91,8 @@ pub enum OuterMethod {
     /// Pantz's map while it converges, then the SQP method with [`SqpSettings::one_line`]:
     /// from the first stop of Pantz's map whose state the minimality certificate rejects, from
     /// the step after one whose decrease of J is more than [`AUTO_CREEP_RATIO`] times the
-    /// decrease before it, or from outer step [`AUTO_PANTZ_STEPS`] + 1 on (docs/method.md,
+    /// decrease before it, or after [`AUTO_PANTZ_STEPS`] steps (steps the trust region's box
+    /// cut are neither compared nor counted; docs/method.md,
     /// "Pantz's map, then SQP").
     /// The default: where Pantz's map converges it is that run bit for bit, and elsewhere it
     /// ends at a certified minimum where Pantz's map does not (docs/method.md says by which
