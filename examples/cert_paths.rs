@@ -6,13 +6,15 @@
 //! `cargo run --release --example cert_paths -- CASE [CASE …] [--skip-exact-above K]
 //!  [--qp backend:tol,…]`, a CASE `N` (balloons at level N), `asym:N` (the balloons from
 //! heights 0.9, 0.2, 0.9, 0.2) or `SCENE:N` (a built-in static scene); each run with `ip` at
-//! its default tolerance, the settings of `contactlab run balloons --n N --backend ip`.
+//! its default tolerance and Pantz's map, the settings of `contactlab run balloons --n N
+//! --backend ip --outer-method pantz`.
 use contactlab::contact::ContactPair;
 use contactlab::scene::balloons::{build, BalloonsParams};
 use contactlab::scene::registry::build_scene;
 use contactlab::solve::certificate::{certificate_with, CertificatePath};
 use contactlab::solve::h1::H1Norms;
 use contactlab::solve::outer::{certificate_active_tol, run, OuterSettings};
+use contactlab::solve::sqp::OuterMethod;
 use contactlab_solvers::{backend_from_name, default_settings};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -69,6 +71,7 @@ fn main() {
         let mut b = backend_from_name("ip", &default_settings("ip")).unwrap();
         let s = OuterSettings {
             qp_tol: default_settings("ip").eps_abs,
+            method: OuterMethod::Pantz,
             ..Default::default()
         };
         let t = Instant::now();

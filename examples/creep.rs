@@ -4,12 +4,15 @@
 //!    the diagnostics' activity tolerance ×1 … ×10⁴: does a looser set of active pairs
 //!    balance J'?
 //!
+//! Both with Pantz's map (the creep is its own).
+//!
 //! `cargo run --release --example creep`
 use contactlab::harness::diagnostics::{converged_diagnostics, DiagnosticSettings};
 use contactlab::scene::rod::{self, RodParams};
 use contactlab::scene::sheets::{self, SheetsParams};
 use contactlab::scene::solids::{self, SolidsParams};
 use contactlab::solve::outer::{run, OuterSettings};
+use contactlab::solve::sqp::OuterMethod;
 use contactlab_solvers::QpSettings;
 use contactlab_solvers::{backend_from_name, default_settings};
 
@@ -37,6 +40,7 @@ fn main() {
             let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
             let mut s = OuterSettings {
                 max_outer: 300,
+                method: OuterMethod::Pantz,
                 ..Default::default()
             };
             s.inner.margin_rel = margin_rel;
@@ -76,7 +80,10 @@ fn main() {
             scene.eps,
             &scene.x0,
             b.as_mut(),
-            &OuterSettings::default(),
+            &OuterSettings {
+                method: OuterMethod::Pantz,
+                ..Default::default()
+            },
             &mut |_, _| {},
         )
         .unwrap();
