@@ -11,7 +11,9 @@
 # METHODS (default "pantz sqp"), EXTRA (more run flags for every run, e.g. SQP options with
 # METHODS=sqp), WORK (default runs/restart), SCENE (default balloons; any other static scene
 # is run from its own start only, `start` = default in the CSV, at its own ε; a scene file,
-# SCENE=path.toml, is run without --n, the sizes then only label the rows).
+# SCENE=path.toml, is run without --n, the sizes then only label the rows). A run directory
+# that has a summary.json is not run again (rerun the script to resume an interrupted one;
+# delete WORK to redo them all); a run without one gets a row with status `no summary`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CONTACTLAB_BIN:-target/release/contactlab}
@@ -30,9 +32,11 @@ for n in $sizes; do
       base=$work/$start-$m-$n
       echo "$start n=$n $m" >&2
       # shellcheck disable=SC2086
+      [ -f "$base/summary.json" ] ||
       "$bin" run "$scene" "${nf[@]}" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
         --frame-every 1000000 --out "$base" ${EXTRA:-} >/dev/null 2>&1 || true
       for a in 0.01 0.1; do
+        [ -f "$base-restart$a/summary.json" ] && continue
         # shellcheck disable=SC2086
         "$bin" run "$scene" "${nf[@]}" "${h[@]}" --outer-method "$m" --backend clarabel --quiet \
           --frame-every 1000000 --start-from "$base/final.vtu" --start-perturb "$a" --out "$base-restart$a" ${EXTRA:-} >/dev/null 2>&1 || true
@@ -47,14 +51,26 @@ starts = sys.argv[5].split()
 cols = ["start", "n", "outer_method", "perturb", "perturb_used", "unperturbed_vertices", "status",
         "outer_iterations", "initial_energy", "final_energy", "kappa", "state",
         "energy_minus_first_run"]
+def load(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except FileNotFoundError:
+        return None
+
+
 rows = []
 for n in sizes:
     for start in starts:
         for m in methods:
             base = f"{work}/{start}-{m}-{n}"
-            s0 = json.load(open(f"{base}/summary.json"))
+            s0 = load(f"{base}/summary.json")
             for a, d in [("", base), ("0.01", base + "-restart0.01"), ("0.1", base + "-restart0.1")]:
-                s = json.load(open(f"{d}/summary.json"))
+                s = load(f"{d}/summary.json")
+                if s is None or s0 is None:
+                    rows.append({"start": start, "n": n, "outer_method": m, "perturb": a,
+                                 "status": "no summary" if s is None else s["status"]})
+                    continue
                 p = s["params"]
                 rows.append({
                     "start": start, "n": n, "outer_method": m, "perturb": a,
