@@ -92,8 +92,8 @@ pub enum OuterMethod {
     /// from the first stop of Pantz's map whose state the minimality certificate rejects, from
     /// the step after one whose decrease of J is more than [`AUTO_CREEP_RATIO`] times the
     /// decrease before it, or after [`AUTO_PANTZ_STEPS`] steps (steps the trust region's box
-    /// cut are neither compared nor counted; docs/method.md,
-    /// "Pantz's map, then SQP").
+    /// cut are neither compared nor counted; docs/method.md, "Pantz's map, then SQP").
+    ///
     /// The default: where Pantz's map converges it is that run bit for bit, and elsewhere it
     /// ends at a certified minimum where Pantz's map does not (docs/method.md says by which
     /// measurements).
@@ -283,6 +283,27 @@ impl Curvature {
 }
 
 impl SqpSettings {
+    /// The settings of the one command line that meets the sliding targets on every scene
+    /// measured (docs/method.md, "One command line for every scene"): the seven row options,
+    /// `--sqp-curvature auto --sqp-normal-stiffness 0.1 --sqp-extrapolate 3` (with
+    /// `--newton-model shifted-tight`, an energy setting: [`crate::solve::outer`] sets it for
+    /// `auto`'s SQP phase).
+    pub fn one_line() -> SqpSettings {
+        SqpSettings {
+            curvature: Curvature::Auto,
+            normal_stiffness: 0.1,
+            drop_endpoint_rows: true,
+            extend_rows: true,
+            drop_vertex_rows: true,
+            drop_side_rows: true,
+            extend_fixed: true,
+            path_rows: true,
+            implying_rows: true,
+            extrapolate: 3,
+            ..SqpSettings::default()
+        }
+    }
+
     /// The curvature mode, the normal stiffness γ and the extrapolation K in effect for an
     /// energy whose Newton model is (`model_psd`) or is not positive semi-definite: `auto`
     /// resolved ([`Curvature::resolve`]), and γ and K dropped where `auto` resolved to `off`
@@ -333,29 +354,6 @@ impl Default for SqpSettings {
             path_rows: false,
             implying_rows: false,
             extrapolate: 0,
-        }
-    }
-}
-
-impl SqpSettings {
-    /// The settings of the one command line that meets the sliding targets on every scene
-    /// measured (docs/method.md, "One command line for every scene"): the seven row options,
-    /// `--sqp-curvature auto --sqp-normal-stiffness 0.1 --sqp-extrapolate 3` (with
-    /// `--newton-model shifted-tight`, an energy setting: [`crate::solve::outer`] sets it for
-    /// `auto`'s SQP phase).
-    pub fn one_line() -> SqpSettings {
-        SqpSettings {
-            curvature: Curvature::Auto,
-            normal_stiffness: 0.1,
-            drop_endpoint_rows: true,
-            extend_rows: true,
-            drop_vertex_rows: true,
-            drop_side_rows: true,
-            extend_fixed: true,
-            path_rows: true,
-            implying_rows: true,
-            extrapolate: 3,
-            ..SqpSettings::default()
         }
     }
 }
