@@ -674,6 +674,7 @@ impl StepContext<'_> {
         warm: &HashMap<ContactPair, [f64; 4]>,
         shift: &mut ModelShift,
         backend: &mut dyn QpBackend,
+        fine_slope: bool,
     ) -> Result<(Option<Step>, SqpStep), RunError> {
         let settings = self.settings;
         let mut inner = settings.inner.clone();
@@ -689,6 +690,7 @@ impl StepContext<'_> {
             roundoff: self.roundoff,
             start_radius: d_prev.min(settings.lazy_start * self.hbar),
             deadline: self.deadline,
+            fine_slope,
         };
         let warm_mu: HashMap<ContactPair, f64> =
             warm.iter().map(|(p, m)| (*p, m.iter().sum())).collect();
@@ -1003,6 +1005,8 @@ fn outer_loop(
     // `auto`: the polish and certificate computed where Pantz's map stopped at a certified
     // state (the end of the run reuses both).
     let mut early_polish: Option<(Step, Certificate)> = None;
+    // The SQP endgame's last resort: the stationarity test without its energy-scale floor.
+    let mut fine_slope = false;
     // The ψ of the last accepted step.
     let mut psi = x.clone();
     // The last step was an SQP step (its polish is about T(x) at the final x), and the
@@ -1027,8 +1031,9 @@ fn outer_loop(
                 &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
             )?,
             OuterMethod::Sqp => {
-                let (step, attempt) =
-                    cur.sqp(&x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend)?;
+                let (step, attempt) = cur.sqp(
+                    &x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend, fine_slope,
+                )?;
                 if attempt.timed_out {
                     // stopped between lazy rounds: x is the last accepted iterate
                     result.status = RunStatus::TimeLimit;
@@ -1186,7 +1191,7 @@ fn outer_loop(
                 let t = (0.1 * now).max(tolerance0.unwrap_or(now) * SQP_TOLERANCE_RANGE);
                 (t < now * (1.0 - 1e-9)).then_some(t)
             });
-            if last_sqp && (progress || tighter.is_some()) {
+            if last_sqp && (progress || tighter.is_some() || !fine_slope) {
                 let c = certify(
                     &x,
                     &pair_multipliers(&result.last_rows, &result.multipliers),
@@ -1194,9 +1199,17 @@ fn outer_loop(
                 let kappa = c.kappa;
                 cert_at_x = Some(c);
                 if kappa > settings.tol_kappa {
-                    if let (false, Some(t)) = (progress, tighter) {
-                        backend.set_tolerance(t);
-                        result.qp_tol_tightened = Some(t);
+                    if !progress {
+                        match tighter {
+                            Some(t) => {
+                                backend.set_tolerance(t);
+                                result.qp_tol_tightened = Some(t);
+                            }
+                            // At the tightest tolerance: the stationarity test drops its floor
+                            // of the energy scale, once (docs/method.md, "The SQP outer
+                            // method", the endgame).
+                            None => fine_slope = true,
+                        }
                     }
                     continue;
                 }

@@ -373,6 +373,10 @@ pub(crate) struct SqpContext<'a> {
     pub start_radius: f64,
     /// The run's time limit: checked between the lazy rounds of the step's QP.
     pub deadline: Option<Instant>,
+    /// The stationarity test's round-off is that of J alone (`64 ε_mach |J|`), without the
+    /// floor `1e-12` of the energy scale: the endgame's last resort, where the certificate
+    /// fails at the backend's tightest tolerance (docs/method.md, "The SQP outer method").
+    pub fine_slope: bool,
 }
 
 /// The outcome of one SQP step.
@@ -1361,7 +1365,8 @@ pub(crate) fn sqp_step(
         .map(|(dof, &c)| g[dof] * s[c])
         .sum();
     let scale = inner.energy_scale.unwrap_or(jx.abs().max(1.0));
-    let round_off = (1e-12 * scale).max(64.0 * f64::EPSILON * jx.abs());
+    let floor = if ctx.fine_slope { 0.0 } else { 1e-12 * scale };
+    let round_off = floor.max(64.0 * f64::EPSILON * jx.abs());
     if slope >= 0.0 || -slope <= round_off {
         out.stationary = true;
         out.rows = rows;
@@ -1613,6 +1618,7 @@ mod tests {
                 roundoff: crate::solve::outer::roundoff_allowance(x),
                 start_radius: 0.0,
                 deadline,
+                fine_slope: false,
             };
             let mut b = backend_from_name("clarabel", &default_settings("clarabel")).unwrap();
             sqp_step(
