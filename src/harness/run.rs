@@ -22,8 +22,10 @@ use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
 use crate::scene::Scene;
 use crate::solve::certificate::Certificate;
+use crate::solve::h1::dof_columns;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
+use crate::solve::second_order::{second_order, SecondOrder, SECOND_ORDER_MAX_DOFS};
 use crate::solve::settings::{Accuracy, RunSettings};
 use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{anyhow, bail, Result};
@@ -200,6 +202,11 @@ pub struct RunArgs {
     /// Write a VTK frame every K outer iterations (the last is always written).
     #[arg(long, default_value_t = 1)]
     pub frame_every: usize,
+    /// The second-order check of a converged static run (summary.json `second_order`;
+    /// docs/method.md, "The second-order check") up to this many free dofs; above, or with 0,
+    /// it is `not_computed`.
+    #[arg(long, default_value_t = SECOND_ORDER_MAX_DOFS)]
+    pub second_order_max_dofs: usize,
     /// No progress line.
     #[arg(long)]
     pub quiet: bool,
@@ -301,6 +308,9 @@ struct Summary {
     diagnostics: Option<DiagSummary>,
     /// The minimality certificate at the returned state (every run).
     certificate: Certificate,
+    /// The second-order check at the returned state (`converged` runs: a KKT point;
+    /// docs/method.md, "The second-order check").
+    second_order: Option<SecondOrder>,
     scene: String,
     dim: usize,
     n: usize,
@@ -831,8 +841,21 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
             None
         }
     };
+    let second = (res.status == RunStatus::Converged).then(|| {
+        second_order(
+            mesh,
+            &scene.energy,
+            &res.x,
+            &dof_columns(mesh, true).0,
+            &res.certificate,
+            scene.eps,
+            scene.h,
+            a.second_order_max_dofs,
+        )
+    });
     let summary = Summary {
         certificate: res.certificate.clone(),
+        second_order: second,
         diagnostics: diagnostics
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),

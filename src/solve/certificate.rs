@@ -149,6 +149,23 @@ pub struct Certificate {
     pub dual_gap: f64,
     /// Seconds spent.
     pub seconds: f64,
+    /// The generators (distinct columns) with their multipliers: what the second-order check
+    /// ([`crate::solve::second_order`]) takes. Not serialized.
+    #[serde(skip)]
+    pub active: Vec<ActiveGenerator>,
+}
+
+/// One distinct constraint gradient of the certificate with its non-negative multiplier.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActiveGenerator {
+    /// The pair of its first generator (identical gradients of other pairs are merged in).
+    pub pair: ContactPair,
+    /// 0: the pair's distance; 1..=4: an endpoint distance of a parallel edge–edge pair.
+    pub part: u8,
+    /// `μ ≥ 0`.
+    pub mu: f64,
+    /// `∇d` on the free-dof columns.
+    pub gradient: Vec<(usize, f64)>,
 }
 
 /// Which solver of the non-negative least-squares problem [`certificate_with`] uses.
@@ -443,6 +460,7 @@ pub fn certificate_with(
     // two pairs) are one column, with the sum of their warm multipliers.
     let mut index: HashMap<Vec<(usize, u64)>, usize> = HashMap::new();
     let mut cols: Vec<Vec<(usize, f64)>> = Vec::new();
+    let mut owner: Vec<(ContactPair, u8)> = Vec::new();
     let mut warm_cols: Vec<f64> = Vec::new();
     for (b, w) in gens.into_iter().zip(warm) {
         let key: Vec<(usize, u64)> = b.entries.iter().map(|&(k, v)| (k, v.to_bits())).collect();
@@ -451,6 +469,7 @@ pub fn certificate_with(
             None => {
                 index.insert(key, cols.len());
                 cols.push(b.entries);
+                owner.push((b.pair, b.part));
                 warm_cols.push(w);
             }
         }
@@ -493,6 +512,17 @@ pub fn certificate_with(
             0.0
         },
         seconds: t0.elapsed().as_secs_f64(),
+        active: owner
+            .into_iter()
+            .zip(cols)
+            .zip(&sol.mu)
+            .map(|(((pair, part), gradient), &mu)| ActiveGenerator {
+                pair,
+                part,
+                mu,
+                gradient,
+            })
+            .collect(),
     })
 }
 

@@ -11,6 +11,7 @@ pub mod h1;
 pub mod observer;
 pub mod outer;
 pub mod qp_units;
+pub mod second_order;
 pub mod settings;
 pub mod sqp;
 pub mod subproblem;
