@@ -5,7 +5,8 @@
 # from its summary.json: the status, J, κ, and the second-order check (docs/method.md, "The
 # second-order check"): its status, λ_min / max|λ| of the restricted Hessian of the
 # Lagrangian, the negative and zero modes, and where it found a lower admissible point the
-# step (over h) and the decrease of J.
+# step (over h) and the decrease of J. The `escape` rows add `--escape-saddles`: the run goes on
+# from that point (`escapes` counts the times).
 #
 # Usage: bash experiments/second_order.sh. Environment: CONTACTLAB_BIN (default
 # target/release/contactlab), OUT (default results/second_order.csv), WORK (default
@@ -37,6 +38,9 @@ runs=(
   "rod-16|rod --n 16"
   "rod-8-line|rod --n 8 $line"
   "rod-16-line|rod --n 16 $line"
+  "rod-8-escape|rod --n 8 --escape-saddles"
+  "rod-16-escape|rod --n 16 --escape-saddles"
+  "rod-32-escape|rod --n 32 --escape-saddles --second-order-max-dofs 2500"
   "sheets-2|sheets --n 2"
   "sheets-4|sheets --n 4"
   "solids-3|solids --n 3"
@@ -54,14 +58,17 @@ for r in "${runs[@]}"; do
   dir=$work/$label
   [ -f "$dir/summary.json" ] && continue
   echo "$label" >&2
+  bound=(--second-order-max-dofs 1500)
+  case $args in *--second-order-max-dofs*) bound=() ;; esac
   # shellcheck disable=SC2086
-  "$bin" run $args --quiet --frame-every 1000000 --time-limit 600 --second-order-max-dofs 1500 \
+  "$bin" run $args --quiet --frame-every 1000000 --time-limit 600 "${bound[@]}" \
     --out "$dir" >/dev/null 2>&1 || true
 done
 python3 - "$work" "$out" "${runs[@]}" <<'PY'
 import csv, json, os, sys
 work, out, runs = sys.argv[1], sys.argv[2], sys.argv[3:]
-cols = ["label", "args", "status", "outer_iterations", "final_energy", "kappa", "second_order",
+cols = ["label", "args", "status", "outer_iterations", "escapes", "final_energy", "kappa",
+        "second_order",
         "min_eigenvalue_rel", "negative_modes", "zero_modes", "free_dofs", "strongly_active",
         "weakly_active", "descent_step_over_h", "descent_decrease", "reason", "seconds"]
 rows = []
@@ -74,9 +81,10 @@ for r in runs:
     s = json.load(open(p))
     so = s.get("second_order") or {}
     row = {"label": label, "args": " ".join(args.split()), "status": s["status"],
-           "outer_iterations": s["outer_iterations"], "final_energy": s["final_energy"],
+           "outer_iterations": s["outer_iterations"], "escapes": s.get("escapes", 0),
+           "final_energy": s["final_energy"],
            "kappa": s["certificate"]["kappa"], "second_order": so.get("status", "")}
-    for k in cols[7:]:
+    for k in cols[8:]:
         v = so.get(k)
         row[k] = "" if v is None else v
     rows.append(row)

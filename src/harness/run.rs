@@ -207,6 +207,11 @@ pub struct RunArgs {
     /// it is `not_computed`.
     #[arg(long, default_value_t = SECOND_ORDER_MAX_DOFS)]
     pub second_order_max_dofs: usize,
+    /// Where that check finds a converged state is not a minimum (a saddle of the contact
+    /// set), go on from the lower admissible point it found (an outer step `escape`, at most
+    /// 10; static runs; docs/method.md, "The second-order check").
+    #[arg(long)]
+    pub escape_saddles: bool,
     /// No progress line.
     #[arg(long)]
     pub quiet: bool,
@@ -311,6 +316,8 @@ struct Summary {
     /// The second-order check at the returned state (`converged` runs: a KKT point;
     /// docs/method.md, "The second-order check").
     second_order: Option<SecondOrder>,
+    /// Outer steps that left a saddle the second-order check found (`--escape-saddles`).
+    escapes: usize,
     scene: String,
     dim: usize,
     n: usize,
@@ -709,7 +716,10 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     validate_cli(&rs)?;
     let qps = rs.qp_settings();
     let mut backend = backend_from_name(&rs.backend, &qps)?;
-    let settings = rs.outer_settings();
+    let mut settings = rs.outer_settings();
+    if a.escape_saddles {
+        settings.escape_saddles_max_dofs = a.second_order_max_dofs;
+    }
     let method = settings.method;
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
@@ -856,6 +866,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let summary = Summary {
         certificate: res.certificate.clone(),
         second_order: second,
+        escapes: res.escapes,
         diagnostics: diagnostics
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),

@@ -9,6 +9,7 @@
 //! [`Observer`] of [`OuterLoop`] ([`run_observed`]; [`run`] takes a closure), which writes CSV,
 //! frames or a progress line.
 
+use crate::contact::continuous::first_contact;
 use crate::contact::motion::{point_key, AnyMotionSearch};
 use crate::contact::{
     all_movable_pairs, displacements, min_distance, near_pairs, rows_for, ContactPair, PairRows,
@@ -19,6 +20,7 @@ use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{certificate, Certificate, CertificateError};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
+use crate::solve::second_order::second_order;
 use crate::solve::sqp::{
     sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_CREEP_RATIO, AUTO_PANTZ_STEPS,
 };
@@ -139,7 +141,15 @@ pub struct OuterSettings {
     /// margin δ), so that the reported state and energy are those of rows at ε, not ε + δ
     /// (docs/method.md, "The row margin"). Not an outer step: `history.csv` ends before it.
     pub polish: bool,
+    /// Where a `converged` run's state is not a minimum by the second-order check
+    /// ([`crate::solve::second_order`], computed up to this many free dofs; 0: never), the run
+    /// goes on from the lower admissible point the check found, an outer step `escape`, at
+    /// most [`MAX_ESCAPES`] times (docs/method.md, "The second-order check"). Default 0.
+    pub escape_saddles_max_dofs: usize,
 }
+
+/// Escapes from saddles in one run at most ([`OuterSettings::escape_saddles_max_dofs`]).
+pub const MAX_ESCAPES: usize = 10;
 
 impl Default for OuterSettings {
     fn default() -> Self {
@@ -158,6 +168,7 @@ impl Default for OuterSettings {
             inner: InnerSettings::default(),
             time_limit_s: None,
             polish: true,
+            escape_saddles_max_dofs: 0,
         }
     }
 }
@@ -329,6 +340,8 @@ pub struct RunResult {
     /// ([`SQP_TOLERANCE_RANGE`]); `None` where it kept the run's own. Where a QP failed at it,
     /// the run stopped at the state before that step.
     pub qp_tol_tightened: Option<f64>,
+    /// Outer steps that left a saddle ([`OuterSettings::escape_saddles_max_dofs`]).
+    pub escapes: usize,
 }
 
 /// How far the SQP method tightens the backend's tolerance when its step is stationary for
@@ -960,6 +973,7 @@ fn outer_loop(
         fallback_steps: 0,
         sqp_from: None,
         qp_tol_tightened: None,
+        escapes: 0,
     };
     let tolerance0 = backend.tolerance();
     // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
@@ -1013,311 +1027,403 @@ fn outer_loop(
     // Newton model's shift carried from one SQP step to the next.
     let mut last_sqp = false;
     let mut shift = ModelShift::default();
-    for k in 1..=settings.max_outer {
-        if deadline.is_some_and(|d| Instant::now() >= d) {
-            result.status = RunStatus::TimeLimit;
-            break;
-        }
-        let creeps = decreases[1] > AUTO_CREEP_RATIO * decreases[0];
-        if auto && method == OuterMethod::Pantz && (free_steps >= AUTO_PANTZ_STEPS || creeps) {
-            // Pantz's map did not stop within its steps, or its decrease of J shrinks too
-            // slowly: it creeps; the SQP method goes on.
-            method = OuterMethod::Sqp;
-            result.sqp_from = Some(k);
-            cur = ctx_line.as_ref().unwrap_or(&ctx);
-        }
-        let step = match method {
-            OuterMethod::Pantz | OuterMethod::Auto => cur.step(
-                &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
-            )?,
-            OuterMethod::Sqp => {
-                let (step, attempt) = cur.sqp(
-                    &x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend, fine_slope,
-                )?;
-                if attempt.timed_out {
-                    // stopped between lazy rounds: x is the last accepted iterate
-                    result.status = RunStatus::TimeLimit;
-                    break;
-                }
-                // A step that a safeguard cut and that moved J by less than the stopping
-                // rule's tolerance is no evidence of a fixed point: take Pantz's step.
-                let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
-                match step {
-                    Some(st) if keep_sqp_step(&attempt, jx - st.sub.energy, tol) => {
-                        result.sqp_steps += 1;
-                        st
-                    }
-                    _ => {
-                        let mut st = cur.step(
-                            &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
-                        )?;
-                        charge_fallback(&mut st, &attempt);
-                        result.fallback_steps += 1;
-                        st
-                    }
-                }
+    // The outer steps before this pass: a pass ends where the run stops, and another begins
+    // where the run escapes a saddle (`escape_saddles_max_dofs`).
+    let mut k0 = 0;
+    'escape: loop {
+        for k in (k0 + 1)..=settings.max_outer {
+            if deadline.is_some_and(|d| Instant::now() >= d) {
+                result.status = RunStatus::TimeLimit;
+                break;
             }
-        };
-        // A QP that fails at a tolerance the endgame tightened is the backend's limit, not the
-        // run's: the tolerance goes back to the run's own, the step is dropped, and the run
-        // stops at x (where the stopping rule held), its status by the certificate.
-        if result.qp_tol_tightened.is_some() && step.sub.qp_status != QpStatus::Solved {
-            if let Some(t) = tolerance0 {
-                backend.set_tolerance(t);
-            }
-            stopped_by_rule = true;
-            break;
-        }
-        last_sqp = step.record.step == "sqp";
-        let sub = step.sub;
-        result.outer_iterations = k;
-        result.inner_iterations += sub.inner_iterations;
-        result.backend_iterations += sub.backend_iterations;
-        observer.iteration(&OuterEvent {
-            record: &step.record,
-            x: &sub.y,
-            rows: &sub.rows,
-            multipliers: &sub.multipliers,
-        });
-        if !step.record.admissible {
-            result.status = RunStatus::Inadmissible;
-            result.min_distance = step.min_distance;
-            break;
-        }
-        if sub.energy > jx {
-            result.status = RunStatus::EnergyIncreased;
-            break;
-        }
-        let jprev = jx;
-        // A step the trust region's box cut is no evidence of creep: neither it nor the one
-        // before it is compared, and it does not count towards AUTO_PANTZ_STEPS.
-        if step.box_active {
-            decreases = [f64::NAN; 2];
-        } else {
-            decreases = [decreases[1], jprev - sub.energy];
-            free_steps += 1;
-        }
-        d_prev = displacements(mesh.dim, &x, &sub.y)
-            .into_iter()
-            .fold(0.0, f64::max)
-            .max(1e-3 * hbar);
-        psi = std::mem::replace(&mut x, sub.y);
-        cert_at_x = None;
-        jx = sub.energy;
-        e_scale = step.energy_scale;
-        result.energy = jx;
-        result.min_distance = step.min_distance;
-        last_mult = sub
-            .rows
-            .iter()
-            .zip(&sub.multipliers)
-            .map(|(r, m)| (r.pair, *m))
-            .collect();
-        result.last_rows = sub.rows;
-        result.multipliers = sub.multipliers;
-        if sub.qp_status != QpStatus::Solved {
-            result.status = RunStatus::SubproblemFailed;
-            break;
-        }
-        if sub.line_search_failed {
-            result.status = RunStatus::LineSearchFailed;
-            break;
-        }
-        if sub.timed_out {
-            result.status = RunStatus::TimeLimit;
-            break;
-        }
-        if settings.pruning == Pruning::TrustRegion {
-            // Grow δ while the box binds; shrink it when the step stays well inside.
-            let t = &settings.trust;
-            if step.box_active {
-                delta = (2.0 * delta).min(t.delta_max * hbar);
-            } else if d_prev < 0.25 * delta {
-                delta = (0.5 * delta).max(t.delta_min * hbar);
-            }
-        }
-        // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
-        // 64u|J| an energy difference is round-off.
-        let round = 64.0 * f64::EPSILON * jx.abs();
-        let tol = (settings.tol_j * e_scale).max(round);
-        if !step.box_active && (jprev - jx).abs() <= tol {
-            if auto && method == OuterMethod::Pantz {
-                // Pantz's map stopped: its state is the result if the certificate holds there
-                // (after the polish, as at the end of the run), else the SQP method goes on
-                // from x (the polish's work is counted, its state dropped).
-                let polish = if settings.polish {
-                    Some(cur.step(
-                        &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
-                    )?)
-                } else {
-                    None
-                };
-                let c = match polish.as_ref().filter(|p| polish_accepted(p, jx)) {
-                    Some(p) => {
-                        certify(&p.sub.y, &pair_multipliers(&p.sub.rows, &p.sub.multipliers))?
-                    }
-                    None => certify(
-                        &x,
-                        &pair_multipliers(&result.last_rows, &result.multipliers),
-                    )?,
-                };
-                if c.kappa <= settings.tol_kappa {
-                    match polish {
-                        Some(p) => early_polish = Some((p, c)),
-                        None => cert_at_x = Some(c),
-                    }
-                    stopped_by_rule = true;
-                    stalled = sub.line_search_stalled;
-                    break;
-                }
-                if let Some(p) = polish {
-                    result.inner_iterations += p.sub.inner_iterations;
-                    result.backend_iterations += p.sub.backend_iterations;
-                }
+            let creeps = decreases[1] > AUTO_CREEP_RATIO * decreases[0];
+            if auto && method == OuterMethod::Pantz && (free_steps >= AUTO_PANTZ_STEPS || creeps) {
+                // Pantz's map did not stop within its steps, or its decrease of J shrinks too
+                // slowly: it creeps; the SQP method goes on.
                 method = OuterMethod::Sqp;
-                result.sqp_from = Some(k + 1);
+                result.sqp_from = Some(k);
                 cur = ctx_line.as_ref().unwrap_or(&ctx);
-                continue;
             }
-            // The SQP method does not creep (docs/method.md): where its step still lowers J
-            // above round-off with a step the line search did not cut below
-            // SQP_ENDGAME_MIN_STEP, or is stationary only to the backend's tolerance, and the
-            // certificate does not hold, it goes on, in the second case (and where the line
-            // search cut the step that short) with the backend's tolerance divided by 10
-            // (down to SQP_TOLERANCE_RANGE times the run's own).
-            let progress =
-                (jprev - jx).abs() > round && step.record.step_length >= SQP_ENDGAME_MIN_STEP;
-            let tighter = backend.tolerance().and_then(|now| {
-                let t = (0.1 * now).max(tolerance0.unwrap_or(now) * SQP_TOLERANCE_RANGE);
-                (t < now * (1.0 - 1e-9)).then_some(t)
-            });
-            if last_sqp && (progress || tighter.is_some() || !fine_slope) {
-                let c = certify(
-                    &x,
-                    &pair_multipliers(&result.last_rows, &result.multipliers),
-                )?;
-                let kappa = c.kappa;
-                cert_at_x = Some(c);
-                if kappa > settings.tol_kappa {
-                    if !progress {
-                        match tighter {
-                            Some(t) => {
-                                backend.set_tolerance(t);
-                                result.qp_tol_tightened = Some(t);
-                            }
-                            // At the tightest tolerance: the stationarity test drops its floor
-                            // of the energy scale, once (docs/method.md, "The SQP outer
-                            // method", the endgame).
-                            None => fine_slope = true,
+            let step = match method {
+                OuterMethod::Pantz | OuterMethod::Auto => cur.step(
+                    &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
+                )?,
+                OuterMethod::Sqp => {
+                    let (step, attempt) = cur.sqp(
+                        &x, jx, k, d_prev, e_scale, &last_mult, &mut shift, backend, fine_slope,
+                    )?;
+                    if attempt.timed_out {
+                        // stopped between lazy rounds: x is the last accepted iterate
+                        result.status = RunStatus::TimeLimit;
+                        break;
+                    }
+                    // A step that a safeguard cut and that moved J by less than the stopping
+                    // rule's tolerance is no evidence of a fixed point: take Pantz's step.
+                    let tol = (settings.tol_j * e_scale).max(64.0 * f64::EPSILON * jx.abs());
+                    match step {
+                        Some(st) if keep_sqp_step(&attempt, jx - st.sub.energy, tol) => {
+                            result.sqp_steps += 1;
+                            st
+                        }
+                        _ => {
+                            let mut st = cur.step(
+                                &x, &x, k, margin, delta, d_prev, e_scale, &last_mult, backend,
+                            )?;
+                            charge_fallback(&mut st, &attempt);
+                            result.fallback_steps += 1;
+                            st
                         }
                     }
-                    continue;
                 }
+            };
+            // A QP that fails at a tolerance the endgame tightened is the backend's limit, not the
+            // run's: the tolerance goes back to the run's own, the step is dropped, and the run
+            // stops at x (where the stopping rule held), its status by the certificate.
+            if result.qp_tol_tightened.is_some() && step.sub.qp_status != QpStatus::Solved {
+                if let Some(t) = tolerance0 {
+                    backend.set_tolerance(t);
+                }
+                stopped_by_rule = true;
+                break;
             }
-            stopped_by_rule = true;
-            stalled = sub.line_search_stalled;
-            break;
-        }
-    }
-    // The polish (docs/method.md, "The row margin"): where the stopping rule stopped the run,
-    // the last sub-problem, min J over T(ψ) of the last ψ, is solved again from the final
-    // state with its rows at ε itself, so that the reported state and energy carry no bias
-    // from the margin δ. Kept only if admissible, solved, and not above J.
-    // After an SQP step, the state before an accepted polish (x, J, distance, rows,
-    // multipliers): returned instead where only it is certified.
-    let mut unpolished = None;
-    if settings.polish && stopped_by_rule {
-        let k = result.outer_iterations;
-        // After an SQP step the natural neighbourhood is T(x) at the final x: at a KKT point
-        // of (3) (rows at ε + δ) x is a KKT point of min J over T(x) too (the weighted sum of
-        // a pair's rows is its distance's linearization), so the polish moves by O(δ).
-        if last_sqp {
-            psi = x.clone();
-        }
-        let (step, early_cert) = match early_polish.take() {
-            Some((st, c)) => (st, Some(c)),
-            None => (
-                cur.step(
-                    &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
-                )?,
-                None,
-            ),
-        };
-        let accepted = polish_accepted(&step, jx);
-        let sub = step.sub;
-        result.inner_iterations += sub.inner_iterations;
-        result.backend_iterations += sub.backend_iterations;
-        result.polish = Some(Polish {
-            energy_change: if accepted { sub.energy - jx } else { 0.0 },
-            inner_iterations: sub.inner_iterations,
-            accepted,
-            rejected_by_certificate: false,
-        });
-        if accepted {
-            if last_sqp {
-                unpolished = Some((
-                    x.clone(),
-                    jx,
-                    result.min_distance,
-                    std::mem::take(&mut result.last_rows),
-                    std::mem::take(&mut result.multipliers),
-                    cert_at_x.take(),
-                ));
+            last_sqp = step.record.step == "sqp";
+            let sub = step.sub;
+            result.outer_iterations = k;
+            result.inner_iterations += sub.inner_iterations;
+            result.backend_iterations += sub.backend_iterations;
+            observer.iteration(&OuterEvent {
+                record: &step.record,
+                x: &sub.y,
+                rows: &sub.rows,
+                multipliers: &sub.multipliers,
+            });
+            if !step.record.admissible {
+                result.status = RunStatus::Inadmissible;
+                result.min_distance = step.min_distance;
+                break;
             }
-            x = sub.y;
+            if sub.energy > jx {
+                result.status = RunStatus::EnergyIncreased;
+                break;
+            }
+            let jprev = jx;
+            // A step the trust region's box cut is no evidence of creep: neither it nor the one
+            // before it is compared, and it does not count towards AUTO_PANTZ_STEPS.
+            if step.box_active {
+                decreases = [f64::NAN; 2];
+            } else {
+                decreases = [decreases[1], jprev - sub.energy];
+                free_steps += 1;
+            }
+            d_prev = displacements(mesh.dim, &x, &sub.y)
+                .into_iter()
+                .fold(0.0, f64::max)
+                .max(1e-3 * hbar);
+            psi = std::mem::replace(&mut x, sub.y);
             cert_at_x = None;
-            result.energy = sub.energy;
+            jx = sub.energy;
+            e_scale = step.energy_scale;
+            result.energy = jx;
             result.min_distance = step.min_distance;
+            last_mult = sub
+                .rows
+                .iter()
+                .zip(&sub.multipliers)
+                .map(|(r, m)| (r.pair, *m))
+                .collect();
             result.last_rows = sub.rows;
             result.multipliers = sub.multipliers;
+            if sub.qp_status != QpStatus::Solved {
+                result.status = RunStatus::SubproblemFailed;
+                break;
+            }
+            if sub.line_search_failed {
+                result.status = RunStatus::LineSearchFailed;
+                break;
+            }
+            if sub.timed_out {
+                result.status = RunStatus::TimeLimit;
+                break;
+            }
+            if settings.pruning == Pruning::TrustRegion {
+                // Grow δ while the box binds; shrink it when the step stays well inside.
+                let t = &settings.trust;
+                if step.box_active {
+                    delta = (2.0 * delta).min(t.delta_max * hbar);
+                } else if d_prev < 0.25 * delta {
+                    delta = (0.5 * delta).max(t.delta_min * hbar);
+                }
+            }
+            // With a binding box the step is not argmin over T(ψ): do not stop on it. Below
+            // 64u|J| an energy difference is round-off.
+            let round = 64.0 * f64::EPSILON * jx.abs();
+            let tol = (settings.tol_j * e_scale).max(round);
+            if !step.box_active && (jprev - jx).abs() <= tol {
+                if auto && method == OuterMethod::Pantz {
+                    // Pantz's map stopped: its state is the result if the certificate holds there
+                    // (after the polish, as at the end of the run), else the SQP method goes on
+                    // from x (the polish's work is counted, its state dropped).
+                    let polish = if settings.polish {
+                        Some(cur.step(
+                            &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+                        )?)
+                    } else {
+                        None
+                    };
+                    let c = match polish.as_ref().filter(|p| polish_accepted(p, jx)) {
+                        Some(p) => {
+                            certify(&p.sub.y, &pair_multipliers(&p.sub.rows, &p.sub.multipliers))?
+                        }
+                        None => certify(
+                            &x,
+                            &pair_multipliers(&result.last_rows, &result.multipliers),
+                        )?,
+                    };
+                    if c.kappa <= settings.tol_kappa {
+                        match polish {
+                            Some(p) => early_polish = Some((p, c)),
+                            None => cert_at_x = Some(c),
+                        }
+                        stopped_by_rule = true;
+                        stalled = sub.line_search_stalled;
+                        break;
+                    }
+                    if let Some(p) = polish {
+                        result.inner_iterations += p.sub.inner_iterations;
+                        result.backend_iterations += p.sub.backend_iterations;
+                    }
+                    method = OuterMethod::Sqp;
+                    result.sqp_from = Some(k + 1);
+                    cur = ctx_line.as_ref().unwrap_or(&ctx);
+                    continue;
+                }
+                // The SQP method does not creep (docs/method.md): where its step still lowers J
+                // above round-off with a step the line search did not cut below
+                // SQP_ENDGAME_MIN_STEP, or is stationary only to the backend's tolerance, and the
+                // certificate does not hold, it goes on, in the second case (and where the line
+                // search cut the step that short) with the backend's tolerance divided by 10
+                // (down to SQP_TOLERANCE_RANGE times the run's own).
+                let progress =
+                    (jprev - jx).abs() > round && step.record.step_length >= SQP_ENDGAME_MIN_STEP;
+                let tighter = backend.tolerance().and_then(|now| {
+                    let t = (0.1 * now).max(tolerance0.unwrap_or(now) * SQP_TOLERANCE_RANGE);
+                    (t < now * (1.0 - 1e-9)).then_some(t)
+                });
+                if last_sqp && (progress || tighter.is_some() || !fine_slope) {
+                    let c = certify(
+                        &x,
+                        &pair_multipliers(&result.last_rows, &result.multipliers),
+                    )?;
+                    let kappa = c.kappa;
+                    cert_at_x = Some(c);
+                    if kappa > settings.tol_kappa {
+                        if !progress {
+                            match tighter {
+                                Some(t) => {
+                                    backend.set_tolerance(t);
+                                    result.qp_tol_tightened = Some(t);
+                                }
+                                // At the tightest tolerance: the stationarity test drops its floor
+                                // of the energy scale, once (docs/method.md, "The SQP outer
+                                // method", the endgame).
+                                None => fine_slope = true,
+                            }
+                        }
+                        continue;
+                    }
+                }
+                stopped_by_rule = true;
+                stalled = sub.line_search_stalled;
+                break;
+            }
         }
-        if early_cert.is_some() {
-            cert_at_x = early_cert;
-        }
-    }
-    result.psi = psi;
-    // The certificate at the returned point, with the last sub-problem's multipliers (summed
-    // per pair) as the warm start of its active set (the SQP endgame's, where it computed it
-    // at that point).
-    result.certificate = match cert_at_x {
-        Some(c) => c,
-        None => certify(
-            &x,
-            &pair_multipliers(&result.last_rows, &result.multipliers),
-        )?,
-    };
-    if let Some((x0, j0, md0, rows0, mult0, cert0)) = unpolished {
-        // The polish is a step of Pantz's map from the SQP end state; where it leaves a state
-        // that the certificate does not pass while the state before it does, the latter is
-        // the result (its rows at ε + δ, so J keeps the margin's bias).
-        if result.certificate.kappa > settings.tol_kappa {
-            let c0 = match cert0 {
-                Some(c) => c,
-                None => certify(&x0, &pair_multipliers(&rows0, &mult0))?,
+        // The polish (docs/method.md, "The row margin"): where the stopping rule stopped the run,
+        // the last sub-problem, min J over T(ψ) of the last ψ, is solved again from the final
+        // state with its rows at ε itself, so that the reported state and energy carry no bias
+        // from the margin δ. Kept only if admissible, solved, and not above J.
+        // After an SQP step, the state before an accepted polish (x, J, distance, rows,
+        // multipliers): returned instead where only it is certified.
+        let mut unpolished = None;
+        if settings.polish && stopped_by_rule {
+            let k = result.outer_iterations;
+            // After an SQP step the natural neighbourhood is T(x) at the final x: at a KKT point
+            // of (3) (rows at ε + δ) x is a KKT point of min J over T(x) too (the weighted sum of
+            // a pair's rows is its distance's linearization), so the polish moves by O(δ).
+            if last_sqp {
+                psi = x.clone();
+            }
+            let (step, early_cert) = match early_polish.take() {
+                Some((st, c)) => (st, Some(c)),
+                None => (
+                    cur.step(
+                        &psi, &x, k, 0.0, delta, d_prev, e_scale, &last_mult, backend,
+                    )?,
+                    None,
+                ),
             };
-            if c0.kappa <= settings.tol_kappa {
-                x = x0;
-                result.energy = j0;
-                result.min_distance = md0;
-                result.last_rows = rows0;
-                result.multipliers = mult0;
-                result.certificate = c0;
-                if let Some(p) = result.polish.as_mut() {
-                    p.energy_change = 0.0;
-                    p.accepted = false;
-                    p.rejected_by_certificate = true;
+            let accepted = polish_accepted(&step, jx);
+            let sub = step.sub;
+            result.inner_iterations += sub.inner_iterations;
+            result.backend_iterations += sub.backend_iterations;
+            result.polish = Some(Polish {
+                energy_change: if accepted { sub.energy - jx } else { 0.0 },
+                inner_iterations: sub.inner_iterations,
+                accepted,
+                rejected_by_certificate: false,
+            });
+            if accepted {
+                if last_sqp {
+                    unpolished = Some((
+                        x.clone(),
+                        jx,
+                        result.min_distance,
+                        std::mem::take(&mut result.last_rows),
+                        std::mem::take(&mut result.multipliers),
+                        cert_at_x.take(),
+                    ));
+                }
+                x = sub.y;
+                cert_at_x = None;
+                result.energy = sub.energy;
+                result.min_distance = step.min_distance;
+                result.last_rows = sub.rows;
+                result.multipliers = sub.multipliers;
+            }
+            if early_cert.is_some() {
+                cert_at_x = early_cert;
+            }
+        }
+        result.psi = psi;
+        // The certificate at the returned point, with the last sub-problem's multipliers (summed
+        // per pair) as the warm start of its active set (the SQP endgame's, where it computed it
+        // at that point).
+        result.certificate = match cert_at_x {
+            Some(c) => c,
+            None => certify(
+                &x,
+                &pair_multipliers(&result.last_rows, &result.multipliers),
+            )?,
+        };
+        if let Some((x0, j0, md0, rows0, mult0, cert0)) = unpolished {
+            // The polish is a step of Pantz's map from the SQP end state; where it leaves a state
+            // that the certificate does not pass while the state before it does, the latter is
+            // the result (its rows at ε + δ, so J keeps the margin's bias).
+            if result.certificate.kappa > settings.tol_kappa {
+                let c0 = match cert0 {
+                    Some(c) => c,
+                    None => certify(&x0, &pair_multipliers(&rows0, &mult0))?,
+                };
+                if c0.kappa <= settings.tol_kappa {
+                    x = x0;
+                    result.energy = j0;
+                    result.min_distance = md0;
+                    result.last_rows = rows0;
+                    result.multipliers = mult0;
+                    result.certificate = c0;
+                    if let Some(p) = result.polish.as_mut() {
+                        p.energy_change = 0.0;
+                        p.accepted = false;
+                        p.rejected_by_certificate = true;
+                    }
                 }
             }
         }
-    }
-    if stopped_by_rule {
-        result.status = if result.certificate.kappa <= settings.tol_kappa {
-            RunStatus::Converged
-        } else if stalled {
-            RunStatus::LineSearchFailed
-        } else {
-            RunStatus::FixedPoint
-        };
+        if stopped_by_rule {
+            result.status = if result.certificate.kappa <= settings.tol_kappa {
+                RunStatus::Converged
+            } else if stalled {
+                RunStatus::LineSearchFailed
+            } else {
+                RunStatus::FixedPoint
+            };
+        }
+        // A certified state that the second-order check finds is not a minimum: the run goes on
+        // from the lower admissible point it found, if nothing lies between (the continuous check).
+        if result.status == RunStatus::Converged
+            && settings.escape_saddles_max_dofs > 0
+            && result.escapes < MAX_ESCAPES
+            && result.outer_iterations < settings.max_outer
+        {
+            let so = second_order(
+                mesh,
+                energy,
+                &x,
+                &norms.free.col,
+                &result.certificate,
+                eps,
+                hbar,
+                settings.escape_saddles_max_dofs,
+            );
+            let z = so.point.filter(|_| so.status == "not_minimum");
+            let clear = z.as_ref().is_some_and(|z| {
+                let search = AnyMotionSearch::new(mesh, &x);
+                let eta = settings.sqp.ccd_thickness * eps;
+                first_contact(mesh, &search, &x, z, eta.min(eps - roundoff)).is_none()
+            });
+            if let (Some(z), true) = (z, clear) {
+                let k = result.outer_iterations + 1;
+                let jz = energy.value(&z);
+                let md = min_distance(mesh, &z, 2.0 * eps, true);
+                e_scale = energy_scale(energy, &z, &norms);
+                let record = IterationRecord {
+                    iteration: k,
+                    energy: jz,
+                    min_distance: md.distance,
+                    admissible: md.distance >= eps - roundoff,
+                    pairs: 0,
+                    rows: 0,
+                    active_rows: 0,
+                    lazy_rounds: 0,
+                    trust_delta: 0.0,
+                    inner_iterations: 0,
+                    backend_iterations: 0,
+                    qp_status: "none",
+                    energy_scale: e_scale,
+                    t_pairs_s: 0.0,
+                    t_assembly_s: 0.0,
+                    t_solve_s: 0.0,
+                    step: "escape",
+                    step_length: f64::NAN,
+                    corrections: 0,
+                    rejections: 0,
+                };
+                observer.iteration(&OuterEvent {
+                    record: &record,
+                    x: &z,
+                    rows: &[],
+                    multipliers: &[],
+                });
+                result.outer_iterations = k;
+                result.escapes += 1;
+                result.energy = jz;
+                result.min_distance = md;
+                result.polish = None;
+                result.status = RunStatus::MaxOuterIterations;
+                k0 = k;
+                psi = z.clone();
+                x = z;
+                jx = jz;
+                cert_at_x = None;
+                stopped_by_rule = false;
+                stalled = false;
+                fine_slope = false;
+                last_sqp = false;
+                decreases = [f64::NAN; 2];
+                if let Some(t) = tolerance0 {
+                    backend.set_tolerance(t);
+                }
+                if auto {
+                    // the SQP phase goes on (or begins) from the lower point
+                    if method == OuterMethod::Pantz {
+                        result.sqp_from = Some(k + 1);
+                    }
+                    method = OuterMethod::Sqp;
+                    cur = ctx_line.as_ref().unwrap_or(&ctx);
+                }
+                continue 'escape;
+            }
+        }
+        break 'escape;
     }
     result.x = x;
     result.wall_time_s = start.elapsed().as_secs_f64();

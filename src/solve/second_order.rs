@@ -86,6 +86,9 @@ pub struct SecondOrder {
     pub descent_step_over_h: Option<f64>,
     /// `not_minimum`: `J(φ_h) − J` at that point (> 0).
     pub descent_decrease: Option<f64>,
+    /// `not_minimum`: that point (all dofs). Not serialized.
+    #[serde(skip)]
+    pub point: Option<Vec<f64>>,
     /// Seconds spent.
     pub seconds: f64,
 }
@@ -321,10 +324,11 @@ fn check(
         v /= n;
     }
     match descent(mesh, energy, x, col, cert, &v, eps, hmesh) {
-        Some((t, dj)) => {
+        Some((t, dj, z)) => {
             out.status = "not_minimum".into();
             out.descent_step_over_h = Some(t / hmesh);
             out.descent_decrease = Some(dj);
+            out.point = Some(z);
         }
         None => {
             out.status = "undetermined".into();
@@ -343,7 +347,7 @@ fn check(
 /// theirs; both within the exact check's tolerance of ε) by
 /// least-norm corrections along their gradients, pass the exact admissibility check and have
 /// J below J(x) by more than round-off, by decreases that shrink like `t²` (the decrease at
-/// `t` is 4 to 64 times that at `t/4`). Returns `t` and the decrease of J at `t`.
+/// `t` is 4 to 64 times that at `t/4`). Returns `t`, the decrease of J at `t` and the point.
 #[allow(clippy::too_many_arguments)]
 fn descent(
     mesh: &Mesh,
@@ -354,7 +358,7 @@ fn descent(
     v: &DVector<f64>,
     eps: f64,
     h: f64,
-) -> Option<(f64, f64)> {
+) -> Option<(f64, f64, Vec<f64>)> {
     let jx = energy.value(x);
     let round = 64.0 * f64::EPSILON * jx.abs().max(f64::MIN_POSITIVE);
     let mu_max = cert.active.iter().fold(0.0f64, |m, g| m.max(g.mu));
@@ -371,7 +375,7 @@ fn descent(
             free_dof[c] = dof;
         }
     }
-    let lower = |t: f64| -> Option<f64> {
+    let lower = |t: f64| -> Option<(f64, Vec<f64>)> {
         let mut z: Vec<f64> = x
             .iter()
             .zip(col)
@@ -432,20 +436,22 @@ fn descent(
             return None;
         }
         let jz = energy.value(&z);
-        (jz.is_finite() && jz < jx - round).then_some(jx - jz)
+        (jz.is_finite() && jz < jx - round).then_some((jx - jz, z))
     };
     for k in 2..=20 {
         let t = h / f64::from(1u32 << k);
         for sign in [1.0, -1.0] {
             // lower at t, t/2 and t/4, by a decrease that shrinks like t² (a ratio of 16
             // over the factor 4; 4 … 64 accepted): the mode's, not another basin's
-            let Some(d1) = lower(sign * t) else { continue };
+            let Some((d1, z)) = lower(sign * t) else {
+                continue;
+            };
             if lower(sign * t / 2.0).is_none() {
                 continue;
             }
-            if let Some(d4) = lower(sign * t / 4.0) {
+            if let Some((d4, _)) = lower(sign * t / 4.0) {
                 if (4.0..=64.0).contains(&(d1 / d4)) {
-                    return Some((t, d1));
+                    return Some((t, d1, z));
                 }
             }
         }
