@@ -128,4 +128,23 @@ fn second_order_not_computed_for_large_runs_and_absent_without_a_fixed_point() {
     );
     assert_eq!(s["status"], "max_outer_iterations");
     assert!(s["second_order"].is_null(), "{}", s["second_order"]);
+    // the escape is an option of static runs: refused by name with --dynamic
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run",
+            "drop",
+            "--dynamic",
+            "--escape-saddles",
+            "--quiet",
+            "--out",
+        ])
+        .arg(tmp("dynamic"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--escape-saddles is an option of static runs"),
+        "{err}"
+    );
 }

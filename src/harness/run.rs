@@ -597,6 +597,9 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
 pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let from_file = a.scene.ends_with(".toml");
     let mut rs = a.settings();
+    if a.dynamic && a.escape_saddles {
+        bail!("--escape-saddles is an option of static runs, not of --dynamic");
+    }
     if a.dynamic && (a.start_from.is_some() || a.start_perturb != 0.0) {
         bail!("--start-from and --start-perturb are options of static runs, not of --dynamic");
     }
