@@ -5,7 +5,7 @@
 # from its summary.json: the status, J, κ, and the second-order check (docs/method.md, "The
 # second-order check"): its status, λ_min / max|λ| of the restricted Hessian of the
 # Lagrangian, the negative and zero modes, and where it found a lower admissible point the
-# step (over h) and the decrease of J. The `escape` rows add `--escape-saddles`: the run goes on
+# step (a length) and the decrease of J. The `escape` rows add `--escape-saddles`: the run goes on
 # from that point (`escapes` counts the times).
 #
 # Usage: bash experiments/second_order.sh. Environment: CONTACTLAB_BIN (default
@@ -70,7 +70,7 @@ work, out, runs = sys.argv[1], sys.argv[2], sys.argv[3:]
 cols = ["label", "args", "status", "outer_iterations", "escapes", "final_energy", "kappa",
         "second_order",
         "min_eigenvalue_rel", "negative_modes", "zero_modes", "free_dofs", "strongly_active",
-        "weakly_active", "descent_step_over_h", "descent_decrease", "reason", "seconds"]
+        "weakly_active", "descent_step", "descent_decrease", "reason", "seconds"]
 rows = []
 for r in runs:
     label, args = r.split("|", 1)

@@ -22,10 +22,9 @@ use crate::scene::registry;
 use crate::scene::ring::{self, RingParams};
 use crate::scene::Scene;
 use crate::solve::certificate::Certificate;
-use crate::solve::h1::dof_columns;
 use crate::solve::observer::{EveryK, Fanout, Observer};
 use crate::solve::outer::{run_observed, OuterEvent, OuterLoop, OuterSettings, Pruning, RunStatus};
-use crate::solve::second_order::{second_order, SecondOrder, SECOND_ORDER_MAX_DOFS};
+use crate::solve::second_order::{SecondOrder, SECOND_ORDER_MAX_DOFS};
 use crate::solve::settings::{Accuracy, RunSettings};
 use crate::solve::sqp::{Curvature, OuterMethod};
 use anyhow::{anyhow, bail, Result};
@@ -203,8 +202,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 1)]
     pub frame_every: usize,
     /// The second-order check of a converged static run (summary.json `second_order`;
-    /// docs/method.md, "The second-order check") up to this many free dofs; above, or with 0,
-    /// it is `not_computed`.
+    /// docs/method.md, "The second-order check") up to this many free dofs (`not_computed`
+    /// above); 0: no check.
     #[arg(long, default_value_t = SECOND_ORDER_MAX_DOFS)]
     pub second_order_max_dofs: usize,
     /// Where that check finds a converged state is not a minimum (a saddle of the contact
@@ -720,9 +719,8 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let qps = rs.qp_settings();
     let mut backend = backend_from_name(&rs.backend, &qps)?;
     let mut settings = rs.outer_settings();
-    if a.escape_saddles {
-        settings.escape_saddles_max_dofs = a.second_order_max_dofs;
-    }
+    settings.second_order_max_dofs = a.second_order_max_dofs;
+    settings.escape_saddles = a.escape_saddles;
     let method = settings.method;
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
@@ -854,21 +852,9 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
             None
         }
     };
-    let second = (res.status == RunStatus::Converged).then(|| {
-        second_order(
-            mesh,
-            &scene.energy,
-            &res.x,
-            &dof_columns(mesh, true).0,
-            &res.certificate,
-            scene.eps,
-            scene.h,
-            a.second_order_max_dofs,
-        )
-    });
     let summary = Summary {
         certificate: res.certificate.clone(),
-        second_order: second,
+        second_order: res.second_order.clone(),
         escapes: res.escapes,
         diagnostics: diagnostics
             .as_ref()

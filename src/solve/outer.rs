@@ -20,7 +20,7 @@ use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{certificate, Certificate, CertificateError};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
-use crate::solve::second_order::second_order;
+use crate::solve::second_order::{second_order, SecondOrder};
 use crate::solve::sqp::{
     sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_CREEP_RATIO, AUTO_PANTZ_STEPS,
 };
@@ -141,14 +141,16 @@ pub struct OuterSettings {
     /// margin δ), so that the reported state and energy are those of rows at ε, not ε + δ
     /// (docs/method.md, "The row margin"). Not an outer step: `history.csv` ends before it.
     pub polish: bool,
-    /// Where a `converged` run's state is not a minimum by the second-order check
-    /// ([`crate::solve::second_order`], computed up to this many free dofs; 0: never), the run
-    /// goes on from the lower admissible point the check found, an outer step `escape`, at
-    /// most [`MAX_ESCAPES`] times (docs/method.md, "The second-order check"). Default 0.
-    pub escape_saddles_max_dofs: usize,
+    /// The second-order check of a `converged` run's state ([`crate::solve::second_order`];
+    /// [`RunResult::second_order`]) up to this many free dofs (`not_computed` above); 0: no
+    /// check (docs/method.md, "The second-order check"). Default 0; `contactlab run` sets it.
+    pub second_order_max_dofs: usize,
+    /// Where that check finds the state is not a minimum, the run goes on from the lower
+    /// admissible point it found, an outer step `escape`, at most [`MAX_ESCAPES`] times.
+    pub escape_saddles: bool,
 }
 
-/// Escapes from saddles in one run at most ([`OuterSettings::escape_saddles_max_dofs`]).
+/// Escapes from saddles in one run at most ([`OuterSettings::escape_saddles`]).
 pub const MAX_ESCAPES: usize = 10;
 
 impl Default for OuterSettings {
@@ -168,7 +170,8 @@ impl Default for OuterSettings {
             inner: InnerSettings::default(),
             time_limit_s: None,
             polish: true,
-            escape_saddles_max_dofs: 0,
+            second_order_max_dofs: 0,
+            escape_saddles: false,
         }
     }
 }
@@ -267,6 +270,44 @@ pub struct IterationRecord {
     pub rejections: usize,
 }
 
+impl IterationRecord {
+    /// The record of a state no sub-problem produced (`step`: `none` at iteration 0, the
+    /// initial state; `escape`, the point the second-order check found): no rows, QP or inner
+    /// steps, `t_pairs_s` the time its pair search took.
+    fn without_solve(
+        iteration: usize,
+        energy: f64,
+        md: &MinDistance,
+        roundoff: f64,
+        eps: f64,
+        energy_scale: f64,
+        step: &'static str,
+    ) -> IterationRecord {
+        IterationRecord {
+            iteration,
+            energy,
+            min_distance: md.distance,
+            admissible: md.distance >= eps - roundoff,
+            pairs: 0,
+            rows: 0,
+            active_rows: 0,
+            lazy_rounds: 0,
+            trust_delta: 0.0,
+            inner_iterations: 0,
+            backend_iterations: 0,
+            qp_status: "none",
+            energy_scale,
+            t_pairs_s: 0.0,
+            t_assembly_s: 0.0,
+            t_solve_s: 0.0,
+            step,
+            step_length: f64::NAN,
+            corrections: 0,
+            rejections: 0,
+        }
+    }
+}
+
 /// Invalid input to a run.
 #[derive(Debug, Error)]
 pub enum RunError {
@@ -340,8 +381,11 @@ pub struct RunResult {
     /// ([`SQP_TOLERANCE_RANGE`]); `None` where it kept the run's own. Where a QP failed at it,
     /// the run stopped at the state before that step.
     pub qp_tol_tightened: Option<f64>,
-    /// Outer steps that left a saddle ([`OuterSettings::escape_saddles_max_dofs`]).
+    /// Outer steps that left a saddle ([`OuterSettings::escape_saddles`]).
     pub escapes: usize,
+    /// The second-order check at the returned state (`converged` runs with
+    /// [`OuterSettings::second_order_max_dofs`] > 0).
+    pub second_order: Option<SecondOrder>,
 }
 
 /// How far the SQP method tightens the backend's tolerance when its step is stationary for
@@ -930,26 +974,11 @@ fn outer_loop(
     observer.init();
     observer.iteration(&OuterEvent {
         record: &IterationRecord {
-            iteration: 0,
-            energy: jx,
-            min_distance: md0.distance,
+            // the start was checked admissible above
             admissible: true,
             pairs: all_pairs.len(),
-            rows: 0,
-            active_rows: 0,
-            lazy_rounds: 0,
-            trust_delta: 0.0,
-            inner_iterations: 0,
-            backend_iterations: 0,
-            qp_status: "none",
-            energy_scale: e_scale,
             t_pairs_s: t_pairs0,
-            t_assembly_s: 0.0,
-            t_solve_s: 0.0,
-            step: "none",
-            step_length: f64::NAN,
-            corrections: 0,
-            rejections: 0,
+            ..IterationRecord::without_solve(0, jx, &md0, roundoff, eps, e_scale, "none")
         },
         x: &x,
         rows: &[],
@@ -974,6 +1003,7 @@ fn outer_loop(
         sqp_from: None,
         qp_tol_tightened: None,
         escapes: 0,
+        second_order: None,
     };
     let tolerance0 = backend.tolerance();
     // The rule stopped the run (`converged` or `fixed_point` by the certificate), and the
@@ -1028,7 +1058,7 @@ fn outer_loop(
     let mut last_sqp = false;
     let mut shift = ModelShift::default();
     // The outer steps before this pass: a pass ends where the run stops, and another begins
-    // where the run escapes a saddle (`escape_saddles_max_dofs`).
+    // where the run escapes a saddle (`escape_saddles`).
     let mut k0 = 0;
     'escape: loop {
         for k in (k0 + 1)..=settings.max_outer {
@@ -1337,13 +1367,10 @@ fn outer_loop(
                 RunStatus::FixedPoint
             };
         }
-        // A certified state that the second-order check finds is not a minimum: the run goes on
-        // from the lower admissible point it found, if nothing lies between (the continuous check).
-        if result.status == RunStatus::Converged
-            && settings.escape_saddles_max_dofs > 0
-            && result.escapes < MAX_ESCAPES
-            && result.outer_iterations < settings.max_outer
-        {
+        // The second-order check of a certified state; where it is not a minimum and the run
+        // escapes saddles, the run goes on from the lower admissible point the check found, if
+        // nothing lies between (the continuous check).
+        if result.status == RunStatus::Converged && settings.second_order_max_dofs > 0 {
             let so = second_order(
                 mesh,
                 energy,
@@ -1352,9 +1379,15 @@ fn outer_loop(
                 &result.certificate,
                 eps,
                 hbar,
-                settings.escape_saddles_max_dofs,
+                settings.second_order_max_dofs,
             );
-            let z = so.point.filter(|_| so.status == "not_minimum");
+            let escape = settings.escape_saddles
+                && result.escapes < MAX_ESCAPES
+                && result.outer_iterations < settings.max_outer;
+            let z = so
+                .point
+                .clone()
+                .filter(|_| escape && so.status == "not_minimum");
             let clear = z.as_ref().is_some_and(|z| {
                 let search = AnyMotionSearch::new(mesh, &x);
                 let eta = settings.sqp.ccd_thickness * eps;
@@ -1365,28 +1398,8 @@ fn outer_loop(
                 let jz = energy.value(&z);
                 let md = min_distance(mesh, &z, 2.0 * eps, true);
                 e_scale = energy_scale(energy, &z, &norms);
-                let record = IterationRecord {
-                    iteration: k,
-                    energy: jz,
-                    min_distance: md.distance,
-                    admissible: md.distance >= eps - roundoff,
-                    pairs: 0,
-                    rows: 0,
-                    active_rows: 0,
-                    lazy_rounds: 0,
-                    trust_delta: 0.0,
-                    inner_iterations: 0,
-                    backend_iterations: 0,
-                    qp_status: "none",
-                    energy_scale: e_scale,
-                    t_pairs_s: 0.0,
-                    t_assembly_s: 0.0,
-                    t_solve_s: 0.0,
-                    step: "escape",
-                    step_length: f64::NAN,
-                    corrections: 0,
-                    rejections: 0,
-                };
+                let record =
+                    IterationRecord::without_solve(k, jz, &md, roundoff, eps, e_scale, "escape");
                 observer.iteration(&OuterEvent {
                     record: &record,
                     x: &z,
@@ -1422,6 +1435,7 @@ fn outer_loop(
                 }
                 continue 'escape;
             }
+            result.second_order = Some(so);
         }
         break 'escape;
     }

@@ -81,9 +81,9 @@ pub struct SecondOrder {
     /// Eigenvalues of the restriction within `1e-8 max|λ|` of zero (flat directions: a
     /// frictionless block free to slide, a slack string's vertex).
     pub zero_modes: usize,
-    /// `not_minimum`: the step `t` (over h) along the negative mode at which the lower
-    /// admissible point was found.
-    pub descent_step_over_h: Option<f64>,
+    /// `not_minimum`: the step `t` (a length: the mode is a unit vector of the free dofs)
+    /// along the negative mode at which the lower admissible point was found.
+    pub descent_step: Option<f64>,
     /// `not_minimum`: `J(φ_h) − J` at that point (> 0).
     pub descent_decrease: Option<f64>,
     /// `not_minimum`: that point (all dofs). Not serialized.
@@ -326,7 +326,7 @@ fn check(
     match descent(mesh, energy, x, col, cert, &v, eps, hmesh) {
         Some((t, dj, z)) => {
             out.status = "not_minimum".into();
-            out.descent_step_over_h = Some(t / hmesh);
+            out.descent_step = Some(t);
             out.descent_decrease = Some(dj);
             out.point = Some(z);
         }
@@ -610,7 +610,7 @@ mod tests {
         assert!((rel - lam / lam.abs()).abs() < 1e-9, "{so:?}");
         // the lower point: t along the tangent, then back to the circle along the gradient at
         // x (vertical): (t, √(ε² − t²)), where J is lower by ε − √(ε² − t²)
-        let t = so.descent_step_over_h.unwrap() * 0.1;
+        let t = so.descent_step.unwrap();
         let dj = so.descent_decrease.unwrap();
         assert!(dj > 0.0 && t < EPS, "{so:?}");
         let expect = EPS - (EPS * EPS - t * t).sqrt();
