@@ -55,6 +55,10 @@ for c in "${cases[@]}"; do
     # Pantz's map, the default until `auto` became it (older binaries have no such flag).
     mflag=()
     "$bin" run --help 2>/dev/null | grep -q -- --outer-method && mflag=(--outer-method pantz)
+    # The solver's time only: no second-order check (on by default since it exists, up to
+    # 1 200 free dofs; older binaries have no such flag).
+    "$bin" run --help 2>/dev/null | grep -q -- --second-order-max-dofs &&
+      mflag+=(--second-order-max-dofs 0)
     /usr/bin/time -f "%M" -o "$dir.rss" \
       "$bin" run "$scene" "${nflag[@]}" "${mflag[@]}" "${flags[@]}" --quiet --frame-every 1000000 \
       --time-limit "$limit" --out "$dir" >/dev/null 2>"$dir.stderr" \

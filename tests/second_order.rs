@@ -1,8 +1,9 @@
 //! The second-order check in `summary.json` (docs/method.md, "The second-order check"): the
 //! asymmetric balloons' certified state is a strict local minimum; the rod's certified state
 //! under the default method is not a minimum: the check finds a lower admissible point along
-//! its negative mode (the check's own construction is tested against a closed form in
-//! `src/solve/second_order.rs`).
+//! its negative mode, and by default the run goes on from that point to a strict minimum; a
+//! sweep file that asks for the check gets its columns (the check's own construction is
+//! tested against a closed form in `src/solve/second_order.rs`).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -51,7 +52,7 @@ fn second_order_rod_certified_state_is_not_a_minimum() {
     // measured: κ 1.4e-7 (converged), one negative mode of the restricted Hessian, and an
     // admissible point h̄/4 (0.0088) away along it whose J is 2.3e-6 lower
     let d = tmp("rod");
-    let s = run(&["rod", "--n", "8", "--second-order-max-dofs", "1500"], &d);
+    let s = run(&["rod", "--n", "8", "--no-escape-saddles"], &d);
     assert_eq!(s["status"], "converged");
     let so = &s["second_order"];
     assert_eq!(so["status"], "not_minimum", "{so}");
@@ -65,21 +66,14 @@ fn second_order_rod_certified_state_is_not_a_minimum() {
     let j = s["final_energy"].as_f64().unwrap();
     assert!(dj > 1e-9 * j.abs(), "{dj} against J = {j}");
     assert_eq!(s["escapes"], 0);
+    assert_eq!(s["escape_saddles"], false);
 
-    // --escape-saddles: the run goes on from the lower point, to a certified strict minimum
-    // below the saddle (measured: one escape, J 3.0e-4 lower)
+    // by default the run goes on from the lower point, to a certified strict minimum below
+    // the saddle (measured: one escape, J 3.0e-4 lower); `--escape-saddles` says the same
     let d = tmp("rod-escape");
-    let e = run(
-        &[
-            "rod",
-            "--n",
-            "8",
-            "--second-order-max-dofs",
-            "1500",
-            "--escape-saddles",
-        ],
-        &d,
-    );
+    let e = run(&["rod", "--n", "8"], &d);
+    assert_eq!(e["escape_saddles"], true);
+    assert_eq!(e["second_order_max_dofs"], 1200);
     assert_eq!(e["status"], "converged");
     assert!(e["escapes"].as_u64().unwrap() >= 1);
     assert_eq!(
@@ -105,14 +99,29 @@ fn second_order_not_computed_for_large_runs_and_absent_without_a_fixed_point() {
     let s = run(&[scene.to_str().unwrap()], &d);
     assert_eq!(s["second_order"]["status"], "not_computed");
     assert_eq!(s["second_order"]["free_dofs"], 3491);
-    // and the rod n = 8 at the default bound (400) and below it
-    for extra in [&[][..], &["--second-order-max-dofs", "100"][..]] {
-        let d = tmp("bound");
-        let args: Vec<&str> = ["rod", "--n", "8"].iter().chain(extra).copied().collect();
-        let s = run(&args, &d);
-        assert_eq!(s["second_order"]["status"], "not_computed");
-        assert_eq!(s["second_order"]["free_dofs"], 525);
-    }
+    // and the rod n = 8 below a bound of 100: not computed, so no escape either (it stops
+    // at the saddle, 15 outer steps, as with --no-escape-saddles)
+    let d = tmp("bound");
+    let s = run(&["rod", "--n", "8", "--second-order-max-dofs", "100"], &d);
+    assert_eq!(s["second_order"]["status"], "not_computed");
+    assert_eq!(s["second_order"]["free_dofs"], 525);
+    assert_eq!(s["escapes"], 0);
+    // --escape-saddles and --no-escape-saddles together: refused
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "run",
+            "rod",
+            "--escape-saddles",
+            "--no-escape-saddles",
+            "--quiet",
+            "--out",
+        ])
+        .arg(tmp("both"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--no-escape-saddles"), "{err}");
     // a run stopped by its outer-step limit is at no fixed point: no check
     let d = tmp("limit");
     let s = run(
@@ -148,4 +157,87 @@ fn second_order_not_computed_for_large_runs_and_absent_without_a_fixed_point() {
         err.contains("--escape-saddles is an option of static runs"),
         "{err}"
     );
+}
+
+const SWEEP: &str = r#"
+name = "second order"
+[defaults]
+backends = ["ip"]
+accuracy = ["default"]
+outer_method = "auto"
+second_order_max_dofs = 1200
+escape_saddles = true
+[[scene]]
+name = "rod"
+n = [8]
+[[scene]]
+name = "rod"
+n = [8]
+escape_saddles = false
+"#;
+
+fn sweep_file(d: &Path, text: &str) -> std::process::Output {
+    std::fs::write(d.join("s.toml"), text).unwrap();
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args([
+            "sweep", "s.toml", "--quiet", "--jobs", "1", "--out", "s.csv",
+        ])
+        .current_dir(d)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn second_order_in_sweep_rows() {
+    // a sweep that asks for the check has its columns after the published ones, and escapes
+    // where escape_saddles says so: the rod n = 8 as `contactlab run` (measured: 26 outer
+    // steps, one escape, a strict minimum; without the escape 15 steps at the saddle)
+    let d = tmp("sweep");
+    std::fs::create_dir_all(&d).unwrap();
+    let o = sweep_file(&d, SWEEP);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut r = csv::Reader::from_path(d.join("s.csv")).unwrap();
+    let hdr: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(
+        &hdr[hdr.len() - 4..],
+        ["second_order", "min_eigenvalue_rel", "free_dofs", "escapes"]
+    );
+    let col = |name: &str| hdr.iter().position(|h| h == name).unwrap();
+    let recs: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+    assert_eq!(recs.len(), 2);
+    let (esc, stay) = if recs[0].get(0).unwrap().ends_with("|escape") {
+        (&recs[0], &recs[1])
+    } else {
+        (&recs[1], &recs[0])
+    };
+    for rec in [esc, stay] {
+        assert_eq!(&rec[col("status")], "converged");
+        assert_eq!(&rec[col("free_dofs")], "525");
+    }
+    assert_eq!(&stay[col("second_order")], "not_minimum");
+    assert_eq!(&stay[col("escapes")], "0");
+    assert_eq!(&esc[col("second_order")], "minimum");
+    assert_eq!(&esc[col("escapes")], "1");
+    let j = |rec: &csv::StringRecord| rec[col("final_energy")].parse::<f64>().unwrap();
+    assert!(j(esc) < j(stay), "{} against {}", j(esc), j(stay));
+    let lam: f64 = esc[col("min_eigenvalue_rel")].parse().unwrap();
+    assert!(lam > 1e-8, "{lam}");
+
+    // escape_saddles without the check, and the check on a dynamic block: refused by name
+    for (text, want) in [
+        (
+            "name = \"x\"\n[[scene]]\nname = \"rod\"\nn = [8]\nescape_saddles = true\n",
+            "escape_saddles set without second_order_max_dofs",
+        ),
+        (
+            "name = \"x\"\n[[scene]]\nname = \"drop\"\nn = [4]\ndynamic = true\ndt = [0.1]\n\
+             steps = 2\nsecond_order_max_dofs = 100\n",
+            "apply to static runs only",
+        ),
+    ] {
+        let _ = std::fs::remove_file(d.join("s.csv"));
+        let o = sweep_file(&d, text);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{err}");
+    }
 }

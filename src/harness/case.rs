@@ -64,6 +64,12 @@ pub struct CaseSettings {
     pub sqp_implying_rows: bool,
     /// SQP: extrapolations of a full step (2, 4, …, 2^k times it; 0: none).
     pub sqp_extrapolate: usize,
+    /// The second-order check of a `converged` run up to this many free dofs (0: none;
+    /// [`OuterSettings::second_order_max_dofs`]).
+    pub second_order_max_dofs: usize,
+    /// Go on from the lower point where that check finds a saddle
+    /// ([`OuterSettings::escape_saddles`]).
+    pub escape_saddles: bool,
 }
 
 /// A finished case.
@@ -161,6 +167,8 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.path_rows = cs.sqp_path_rows;
     settings.sqp.implying_rows = cs.sqp_implying_rows;
     settings.sqp.extrapolate = cs.sqp_extrapolate;
+    settings.second_order_max_dofs = cs.second_order_max_dofs;
+    settings.escape_saddles = cs.escape_saddles;
     settings
 }
 

@@ -185,6 +185,8 @@ fn run_prepared(
         sqp_path_rows: rs.sqp_path_rows,
         sqp_implying_rows: rs.sqp_implying_rows,
         sqp_extrapolate: rs.sqp_extrapolate,
+        second_order_max_dofs: 0,
+        escape_saddles: false,
     };
     let qps = rs.qp_settings();
     let out = a

@@ -81,6 +81,8 @@ pub fn cmd_export(a: &ExportArgs) -> Result<()> {
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
+        second_order_max_dofs: 0,
+        escape_saddles: false,
         time_limit_s: None,
     };
     let qp_settings = accuracy.qp_settings(&a.backend);

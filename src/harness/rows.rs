@@ -282,6 +282,50 @@ impl StaticRow {
     }
 }
 
+/// The columns a static sweep adds after [`StaticRow`] where it asks for the second-order
+/// check (`second_order_max_dofs`; a sweep without it keeps the published header).
+#[derive(Serialize, Clone, Debug, Default, PartialEq)]
+pub struct SecondOrderColumns {
+    /// The check of a `converged` run's state: `minimum`, `degenerate`, `not_minimum`,
+    /// `undetermined` or `not_computed` (empty for the other statuses).
+    pub second_order: Option<String>,
+    /// Its `λ_min / max|λ|` of the restricted Hessian of the Lagrangian.
+    #[serde(serialize_with = "opt_float")]
+    pub min_eigenvalue_rel: Option<f64>,
+    /// Free dofs of the check.
+    pub free_dofs: Option<usize>,
+    /// Outer steps that left a saddle the check found (`escape_saddles`).
+    pub escapes: Option<usize>,
+}
+
+impl SecondOrderColumns {
+    /// The columns of a finished run.
+    pub fn of_result(r: &crate::solve::outer::RunResult) -> SecondOrderColumns {
+        let so = r.second_order.as_ref();
+        SecondOrderColumns {
+            second_order: so.map(|so| so.status.clone()),
+            min_eigenvalue_rel: so.and_then(|so| so.min_eigenvalue_rel),
+            free_dofs: so.map(|so| so.free_dofs),
+            escapes: Some(r.escapes),
+        }
+    }
+}
+
+impl RunRow for (StaticRow, SecondOrderColumns) {
+    fn failed(status: &str, error: String) -> Self {
+        (
+            StaticRow::failed(status, error),
+            SecondOrderColumns::default(),
+        )
+    }
+    fn status(&self) -> &str {
+        &self.0.status
+    }
+    fn wall_time_cell(&self) -> String {
+        self.0.wall_time_cell()
+    }
+}
+
 impl RunRow for StaticRow {
     fn failed(status: &str, error: String) -> Self {
         StaticRow {
@@ -607,6 +651,10 @@ mod tests {
                        step1_t_solve_s,step1_t_step_s,total_t_pairs_s,total_t_assembly_s,\
                        total_t_solve_s,qp_solves,wall_time_s,peak_rss_mb,final_energy,backend";
         let index = "k,file,variables,rows,nnz_p,nnz_a,status,iterations,objective";
+        assert_eq!(
+            header::<(CaseColumns, (StaticRow, SecondOrderColumns))>().join(","),
+            format!("{case},{stat},second_order,min_eigenvalue_rel,free_dofs,escapes")
+        );
         assert_eq!(header::<CaseColumns>().join(","), case);
         assert_eq!(
             header::<(CaseColumns, StaticRow)>().join(","),

@@ -208,9 +208,14 @@ pub struct RunArgs {
     pub second_order_max_dofs: usize,
     /// Where that check finds a converged state is not a minimum (a saddle of the contact
     /// set), go on from the lower admissible point it found (an outer step `escape`, at most
-    /// 10; static runs; docs/method.md, "The second-order check").
-    #[arg(long)]
+    /// 10; docs/method.md, "The second-order check"). The default of static runs with the
+    /// `auto` and `sqp` outer methods; with `pantz` only when given (an error with --dynamic).
+    #[arg(long, conflicts_with = "no_escape_saddles")]
     pub escape_saddles: bool,
+    /// Stop at a certified state even where the second-order check finds it is not a minimum
+    /// (the check is still reported).
+    #[arg(long)]
+    pub no_escape_saddles: bool,
     /// No progress line.
     #[arg(long)]
     pub quiet: bool,
@@ -315,8 +320,12 @@ struct Summary {
     /// The second-order check at the returned state (`converged` runs: a KKT point;
     /// docs/method.md, "The second-order check").
     second_order: Option<SecondOrder>,
-    /// Outer steps that left a saddle the second-order check found (`--escape-saddles`).
+    /// Outer steps that left a saddle the second-order check found.
     escapes: usize,
+    /// Whether the run escaped saddles (`false` with `--no-escape-saddles`).
+    escape_saddles: bool,
+    /// The bound of the second-order check in free dofs (`--second-order-max-dofs`; 0: off).
+    second_order_max_dofs: usize,
     scene: String,
     dim: usize,
     n: usize,
@@ -720,8 +729,10 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let mut backend = backend_from_name(&rs.backend, &qps)?;
     let mut settings = rs.outer_settings();
     settings.second_order_max_dofs = a.second_order_max_dofs;
-    settings.escape_saddles = a.escape_saddles;
     let method = settings.method;
+    // Pantz's map stays the paper's method unless asked: it escapes only with the flag.
+    settings.escape_saddles =
+        a.escape_saddles || (!a.no_escape_saddles && method != OuterMethod::Pantz);
     // a scene file's n: its number of vertices
     let n = if from_file { scene.mesh.nv() } else { n };
     let out = a
@@ -856,6 +867,8 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         certificate: res.certificate.clone(),
         second_order: res.second_order.clone(),
         escapes: res.escapes,
+        escape_saddles: settings.escape_saddles,
+        second_order_max_dofs: settings.second_order_max_dofs,
         diagnostics: diagnostics
             .as_ref()
             .map(|(d, tol)| DiagSummary::new(d, *tol)),
@@ -897,7 +910,7 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!(
-        "{}: status {} after {} outer iterations{}, J = {:.12e}, kappa = {:.3e}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
+        "{}: status {} after {} outer iterations{}, J = {:.12e}, kappa = {:.3e}{}, state {}, min distance / eps = {:.6}, {:.1} s -> {}",
         rs.backend,
         res.status.as_str(),
         res.outer_iterations,
@@ -914,6 +927,12 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
         },
         res.energy,
         res.certificate.kappa,
+        // the second-order check where it was computed, and the saddles left
+        match (&res.second_order, res.escapes) {
+            (Some(so), 0) if so.status != "not_computed" => format!(", second order {}", so.status),
+            (Some(so), k) if k > 0 => format!(", second order {} after {k} escape(s)", so.status),
+            _ => String::new(),
+        },
         state,
         res.min_distance.distance / scene.eps,
         res.wall_time_s,

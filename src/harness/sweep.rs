@@ -17,7 +17,7 @@ use crate::energy::HessianModel;
 use crate::harness::case::{self, CaseSettings};
 use crate::harness::diagnostics::h1_distance;
 use crate::harness::rows::{
-    csv_line, header, record_line, CaseColumns, DynamicRow, RunRow, StaticRow,
+    csv_line, header, record_line, CaseColumns, DynamicRow, RunRow, SecondOrderColumns, StaticRow,
 };
 use crate::scene::registry::build_scene;
 use crate::solve::dynamics::{DynamicSettings, Scheme};
@@ -222,6 +222,13 @@ pub struct Common {
     /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check passes
     /// (default 0: off; with `outer_method = "sqp"` only).
     pub sqp_extrapolate: Option<usize>,
+    /// The second-order check of each `converged` run up to this many free dofs (default 0:
+    /// none; `contactlab run`'s default is 1 200): the columns `second_order`,
+    /// `min_eigenvalue_rel` (static runs only).
+    pub second_order_max_dofs: Option<usize>,
+    /// Where that check finds a saddle, go on from the lower point it found (default false;
+    /// needs `second_order_max_dofs`; the column `escapes`; static runs only).
+    pub escape_saddles: Option<bool>,
     /// Reference run for the error columns.
     pub reference: Option<ReferenceSpec>,
 }
@@ -429,6 +436,8 @@ struct BlockSettings {
     sqp_path_rows: bool,
     sqp_implying_rows: bool,
     sqp_extrapolate: usize,
+    second_order_max_dofs: usize,
+    escape_saddles: bool,
     reference: Option<ReferenceSpec>,
 }
 
@@ -516,6 +525,26 @@ impl BlockSettings {
             .or(defaults.sqp_implying_rows)
             .unwrap_or(false);
         let sqp_extrapolate = c.sqp_extrapolate.or(defaults.sqp_extrapolate).unwrap_or(0);
+        let second_order_max_dofs = c
+            .second_order_max_dofs
+            .or(defaults.second_order_max_dofs)
+            .unwrap_or(0);
+        let escape_saddles = c
+            .escape_saddles
+            .or(defaults.escape_saddles)
+            .unwrap_or(false);
+        if b.dynamic && (second_order_max_dofs != 0 || escape_saddles) {
+            bail!(
+                "{at}: second_order_max_dofs and escape_saddles apply to static runs only (the \
+                 check is of a static run's end state)"
+            );
+        }
+        if escape_saddles && second_order_max_dofs == 0 {
+            bail!(
+                "{at}: escape_saddles set without second_order_max_dofs: it goes on from the \
+                 lower point that check finds, and does nothing without it"
+            );
+        }
         // The run settings of each backend, checked by RunSettings::validate (the keys a sweep
         // file does not set at their defaults).
         for be in backends
@@ -636,6 +665,8 @@ impl BlockSettings {
             sqp_path_rows,
             sqp_implying_rows,
             sqp_extrapolate,
+            second_order_max_dofs,
+            escape_saddles,
             reference,
         })
     }
@@ -673,6 +704,8 @@ impl BlockSettings {
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
+            second_order_max_dofs: self.second_order_max_dofs,
+            escape_saddles: self.escape_saddles,
         };
         let mut spec = RunSpec {
             key: String::new(),
@@ -702,7 +735,7 @@ impl BlockSettings {
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -773,7 +806,13 @@ fn run_key(spec: &RunSpec) -> String {
             String::new()
         } else {
             format!("|extrapolate={}", s.sqp_extrapolate)
-        }
+        },
+        if s.second_order_max_dofs == 0 {
+            String::new()
+        } else {
+            format!("|second-order={}", s.second_order_max_dofs)
+        },
+        if s.escape_saddles { "|escape" } else { "" }
     )
 }
 
@@ -937,10 +976,20 @@ fn catch_row<R: RunRow>(run: impl FnOnce() -> Result<R>) -> R {
 
 /// Runs one static spec into its row (never panics: a panic becomes a `panic` row).
 fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> StaticRow {
+    run_one_with(spec, reference, &mut SecondOrderColumns::default())
+}
+
+/// [`run_one`], and the second-order check's columns of the run into `cols`.
+fn run_one_with(
+    spec: &RunSpec,
+    reference: Option<&Reference>,
+    cols: &mut SecondOrderColumns,
+) -> StaticRow {
     let t = Instant::now();
     let mut row = catch_row(|| -> Result<_> {
         let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
         let o = case::execute(&scene, &spec.settings, &mut |_, _| {})?;
+        *cols = SecondOrderColumns::of_result(&o.res);
         let mut row = StaticRow::of_case(&scene, &o);
         if let Some(r) = reference {
             row.reference_energy = Some(r.energy);
@@ -1027,6 +1076,9 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
+        // no second-order check: the reference's J is what the error columns read
+        second_order_max_dofs: 0,
+        escape_saddles: false,
         // the block's limit: a reference that reaches it is not converged, and the rows of its
         // group then get no error columns
         time_limit_s: spec.settings.time_limit_s,
@@ -1072,6 +1124,13 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
     }
     if runs.first().is_some_and(|r| r.dynamic.is_some()) {
         sweep_rows(a, &runs, |r, _| run_one_dynamic(r))
+    } else if runs.iter().any(|r| r.settings.second_order_max_dofs > 0) {
+        // the check's columns after the published ones, only where the file asks for it
+        sweep_rows(a, &runs, |r, refr| {
+            let mut cols = SecondOrderColumns::default();
+            let row = run_one_with(r, refr, &mut cols);
+            (row, cols)
+        })
     } else {
         sweep_rows(a, &runs, run_one)
     }

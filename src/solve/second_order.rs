@@ -44,14 +44,15 @@ use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
 use crate::solve::certificate::{ActiveGenerator, Certificate};
 use crate::solve::outer::roundoff_allowance;
+use faer::linalg::solvers::Solve;
 use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 
-/// Free dofs above which the check is not computed by default: it is dense (eigenvalues of an
-/// `n × n` matrix), under 0.1 s below 400 free dofs, 0.25–0.4 s at 632, 1.1–2.7 s at 1 272,
-/// against runs of a fraction of a second (docs/method.md, "The second-order check");
+/// Free dofs above which `contactlab run` does not compute the check: it is dense (eigenvalues
+/// of an `n × n` matrix), 0.05–0.22 s at 525–632 free dofs, 0.14–0.27 s at 954–1 053,
+/// 0.36–0.95 s at 1 272 (docs/method.md, "The second-order check");
 /// `contactlab run --second-order-max-dofs N` sets another bound.
-pub const SECOND_ORDER_MAX_DOFS: usize = 400;
+pub const SECOND_ORDER_MAX_DOFS: usize = 1200;
 /// A multiplier above this fraction of the largest makes its distance strongly active.
 const STRONG_REL: f64 = 1e-6;
 /// Eigenvalues within this fraction of the largest `|λ|` count as zero.
@@ -269,8 +270,12 @@ fn check(
             .fold(0.0, f64::max);
     let m = &h - &qm * hq.transpose() - &hq * qm.transpose()
         + &qm * (qhq + DMatrix::identity(r, r) * c) * qm.transpose();
-    let m = (&m + m.transpose()) * 0.5;
-    let mut eig: Vec<f64> = m.clone().symmetric_eigenvalues().iter().copied().collect();
+    // The dense eigenvalues and the Cholesky factor below are faer's (blocked; 5× nalgebra's
+    // at 1 300–2 000 dofs, docs/method.md, "The second-order check").
+    let m = faer::Mat::<f64>::from_fn(nf, nf, |i, j| 0.5 * (m[(i, j)] + m[(j, i)]));
+    let Ok(mut eig) = m.self_adjoint_eigenvalues(faer::Side::Lower) else {
+        return SecondOrder::new("undetermined", "the eigenvalue solver failed".into());
+    };
     eig.sort_by(f64::total_cmp);
     let reduced = &eig[..nf - r];
     let lmin = reduced[0];
@@ -304,14 +309,17 @@ fn check(
     }
     // The eigenvector of λ_min: inverse iteration on M − sI, s just below λ_min.
     let s = lmin - 1e-3 * (scale * EIG_REL).max(lmin.abs());
-    let Some(chol) = (&m - DMatrix::identity(nf, nf) * s).cholesky() else {
+    let shifted =
+        faer::Mat::<f64>::from_fn(nf, nf, |i, j| m[(i, j)] - if i == j { s } else { 0.0 });
+    let Ok(chol) = shifted.llt(faer::Side::Lower) else {
         out.status = "undetermined".into();
         out.reason = "inverse iteration failed".into();
         return out;
     };
     let mut v = DVector::from_element(nf, 1.0 / (nf as f64).sqrt());
     for _ in 0..4 {
-        v = chol.solve(&v);
+        let y = chol.solve(faer::Col::<f64>::from_fn(nf, |i| v[i]));
+        v = DVector::from_fn(nf, |i, _| y[i]);
         // keep it in Z
         for qi in &q {
             let c = qi.dot(&v);
@@ -404,7 +412,7 @@ fn descent(
             // one gradient); the next round corrects what that leaves
             let k = rows.len();
             let mut dense_g = vec![0.0; v.len()];
-            let mut aat = DMatrix::<f64>::zeros(k, k);
+            let mut aat = faer::Mat::<f64>::zeros(k, k);
             for (i, (gi, _)) in rows.iter().enumerate() {
                 for &(c, w) in &gi.gradient {
                     dense_g[c] += w;
@@ -418,12 +426,12 @@ fn descent(
                     dense_g[c] = 0.0;
                 }
             }
-            let reg = 1e-12 * aat.trace() / k as f64;
+            let reg = 1e-12 * (0..k).map(|i| aat[(i, i)]).sum::<f64>() / k as f64;
             for i in 0..k {
                 aat[(i, i)] += reg;
             }
-            let r = DVector::from_iterator(k, rows.iter().map(|(_, r)| *r));
-            let alpha = aat.cholesky()?.solve(&r);
+            let r = faer::Col::<f64>::from_fn(k, |i| rows[i].1);
+            let alpha = aat.llt(faer::Side::Lower).ok()?.solve(r);
             for ((g, _), a) in rows.iter().zip(alpha.iter()) {
                 for &(c, w) in &g.gradient {
                     let dof = free_dof[c];
