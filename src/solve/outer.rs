@@ -147,6 +147,7 @@ pub struct OuterSettings {
     pub second_order_max_dofs: usize,
     /// Where that check finds the state is not a minimum, the run goes on from the lower
     /// admissible point it found, an outer step `escape`, at most [`MAX_ESCAPES`] times.
+    /// Default false; `contactlab run` sets it with the `auto` and `sqp` outer methods.
     pub escape_saddles: bool,
 }
 
