@@ -107,21 +107,10 @@ fn second_order_not_computed_for_large_runs_and_absent_without_a_fixed_point() {
     assert_eq!(s["second_order"]["free_dofs"], 525);
     assert_eq!(s["escapes"], 0);
     // --escape-saddles and --no-escape-saddles together: refused
-    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args([
-            "run",
-            "rod",
-            "--escape-saddles",
-            "--no-escape-saddles",
-            "--quiet",
-            "--out",
-        ])
-        .arg(tmp("both"))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("--no-escape-saddles"), "{err}");
+    refused(
+        &["rod", "--escape-saddles", "--no-escape-saddles"],
+        "--no-escape-saddles",
+    );
     // a run stopped by its outer-step limit is at no fixed point: no check
     let d = tmp("limit");
     let s = run(
@@ -139,24 +128,24 @@ fn second_order_not_computed_for_large_runs_and_absent_without_a_fixed_point() {
     assert_eq!(s["status"], "max_outer_iterations");
     assert!(s["second_order"].is_null(), "{}", s["second_order"]);
     // the escape is an option of static runs: refused by name with --dynamic
+    refused(
+        &["drop", "--dynamic", "--escape-saddles"],
+        "--escape-saddles is an option of static runs",
+    );
+}
+
+/// `contactlab run ARGS` exits with the usage-error code 2 and a message that contains `want`.
+fn refused(args: &[&str], want: &str) {
     let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args([
-            "run",
-            "drop",
-            "--dynamic",
-            "--escape-saddles",
-            "--quiet",
-            "--out",
-        ])
-        .arg(tmp("dynamic"))
+        .arg("run")
+        .args(args)
+        .args(["--quiet", "--out"])
+        .arg(tmp("refused"))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("--escape-saddles is an option of static runs"),
-        "{err}"
-    );
+    assert!(err.contains(want), "{err}");
 }
 
 const SWEEP: &str = r#"

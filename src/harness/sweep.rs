@@ -495,44 +495,23 @@ impl BlockSettings {
                 )
             })?,
         };
-        let sqp_normal_stiffness = c
-            .sqp_normal_stiffness
-            .or(defaults.sqp_normal_stiffness)
-            .unwrap_or(0.0);
-        let sqp_drop_endpoint_rows = c
-            .sqp_drop_endpoint_rows
-            .or(defaults.sqp_drop_endpoint_rows)
-            .unwrap_or(false);
-        let sqp_extend_rows = c
-            .sqp_extend_rows
-            .or(defaults.sqp_extend_rows)
-            .unwrap_or(false);
-        let sqp_drop_vertex_rows = c
-            .sqp_drop_vertex_rows
-            .or(defaults.sqp_drop_vertex_rows)
-            .unwrap_or(false);
-        let sqp_drop_side_rows = c
-            .sqp_drop_side_rows
-            .or(defaults.sqp_drop_side_rows)
-            .unwrap_or(false);
-        let sqp_extend_fixed = c
-            .sqp_extend_fixed
-            .or(defaults.sqp_extend_fixed)
-            .unwrap_or(false);
-        let sqp_path_rows = c.sqp_path_rows.or(defaults.sqp_path_rows).unwrap_or(false);
-        let sqp_implying_rows = c
-            .sqp_implying_rows
-            .or(defaults.sqp_implying_rows)
-            .unwrap_or(false);
-        let sqp_extrapolate = c.sqp_extrapolate.or(defaults.sqp_extrapolate).unwrap_or(0);
-        let second_order_max_dofs = c
-            .second_order_max_dofs
-            .or(defaults.second_order_max_dofs)
-            .unwrap_or(0);
-        let escape_saddles = c
-            .escape_saddles
-            .or(defaults.escape_saddles)
-            .unwrap_or(false);
+        // a key of the block, else of [defaults], else its default
+        macro_rules! key {
+            ($k:ident, $default:expr) => {
+                c.$k.or(defaults.$k).unwrap_or($default)
+            };
+        }
+        let sqp_normal_stiffness = key!(sqp_normal_stiffness, 0.0);
+        let sqp_drop_endpoint_rows = key!(sqp_drop_endpoint_rows, false);
+        let sqp_extend_rows = key!(sqp_extend_rows, false);
+        let sqp_drop_vertex_rows = key!(sqp_drop_vertex_rows, false);
+        let sqp_drop_side_rows = key!(sqp_drop_side_rows, false);
+        let sqp_extend_fixed = key!(sqp_extend_fixed, false);
+        let sqp_path_rows = key!(sqp_path_rows, false);
+        let sqp_implying_rows = key!(sqp_implying_rows, false);
+        let sqp_extrapolate = key!(sqp_extrapolate, 0);
+        let second_order_max_dofs = key!(second_order_max_dofs, 0);
+        let escape_saddles = key!(escape_saddles, false);
         if b.dynamic && (second_order_max_dofs != 0 || escape_saddles) {
             bail!(
                 "{at}: second_order_max_dofs and escape_saddles apply to static runs only (the \
