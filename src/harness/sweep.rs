@@ -224,7 +224,7 @@ pub struct Common {
     pub sqp_extrapolate: Option<usize>,
     /// The second-order check of each `converged` run up to this many free dofs (default 0:
     /// none; `contactlab run`'s default is 1 200): the columns `second_order`,
-    /// `min_eigenvalue_rel` (static runs only).
+    /// `min_eigenvalue_rel`, `free_dofs`, `escapes` (static runs only).
     pub second_order_max_dofs: Option<usize>,
     /// Where that check finds a saddle, go on from the lower point it found (default false;
     /// needs `second_order_max_dofs`; the column `escapes`; static runs only).

@@ -49,8 +49,9 @@ use nalgebra::{DMatrix, DVector};
 use std::time::Instant;
 
 /// Free dofs above which `contactlab run` does not compute the check: it is dense (eigenvalues
-/// of an `n × n` matrix), 0.05–0.22 s at 525–632 free dofs, 0.14–0.27 s at 954–1 053,
-/// 0.36–0.95 s at 1 272 (docs/method.md, "The second-order check");
+/// of an `n × n` matrix), 0.03–0.22 s at 525–632 free dofs, 0.14–0.21 s at 954–1 053,
+/// 0.27–0.69 s at 1 272–1 350 (`results/second_order.csv`; docs/method.md, "The
+/// second-order check");
 /// `contactlab run --second-order-max-dofs N` sets another bound.
 pub const SECOND_ORDER_MAX_DOFS: usize = 1200;
 /// A multiplier above this fraction of the largest makes its distance strongly active.
@@ -270,8 +271,8 @@ fn check(
             .fold(0.0, f64::max);
     let m = &h - &qm * hq.transpose() - &hq * qm.transpose()
         + &qm * (qhq + DMatrix::identity(r, r) * c) * qm.transpose();
-    // The dense eigenvalues and the Cholesky factor below are faer's (blocked; 5× nalgebra's
-    // at 1 300–2 000 dofs, docs/method.md, "The second-order check").
+    // The dense eigenvalues and the Cholesky factor below are faer's (blocked; 4.6–5.1×
+    // faster than nalgebra's at 1 300–2 000 dofs, docs/method.md, "The second-order check").
     let m = faer::Mat::<f64>::from_fn(nf, nf, |i, j| 0.5 * (m[(i, j)] + m[(j, i)]));
     let Ok(mut eig) = m.self_adjoint_eigenvalues(faer::Side::Lower) else {
         return SecondOrder::new("undetermined", "the eigenvalue solver failed".into());
