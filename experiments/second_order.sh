@@ -49,6 +49,7 @@ runs=(
   "solids-4|solids --n 4"
   "balloons3d-1|balloons3d --n 1"
   "balloons3d-2|balloons3d --n 2"
+  "balloons3d-3|balloons3d --n 3 --eps 0.013171772805113635 --second-order-max-dofs 4000"
   "two_strings|experiments/scenes/two_strings.toml"
   "patch_test|experiments/scenes/benchmarks/patch_test.toml"
   "hertz2d_rigid|experiments/scenes/benchmarks/hertz2d_rigid.toml --second-order-max-dofs 4000"
