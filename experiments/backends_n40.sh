@@ -6,8 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
 n=${1:-40}
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 for b in clarabel ip osqp uzawa; do
   [ -f runs/n$n-$b/summary.json ] || $bin run balloons --n "$n" --backend $b --outer-method pantz --quiet --frame-every 1000000 --out runs/n$n-$b >&2 || true
 done

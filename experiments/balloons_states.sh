@@ -20,8 +20,7 @@ outer=${OUTER:-pantz}
 time_limit=${TIME_LIMIT:-120}
 tag=$backend-$pruning
 [ "$outer" = pantz ] || tag=$tag-$outer
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 for n in $ns; do
   for case in none p1e-6 p1e-3 p1e-2 asymmetric; do
     out=runs/states/$tag-n$n-$case

@@ -5,8 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 export CONTACTLAB_BIN=$bin
 steps=("$@")
 [ ${#steps[@]} -gt 0 ] || steps=(scenes patch hertz2d hertz2d_sqp hertz3d units plots)

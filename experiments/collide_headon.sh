@@ -11,7 +11,7 @@
 # --backend BACKEND --max-outer 2000 --quiet --frame-every 1000000` into runs/collide_headon/M-N/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 out=${OUT:-results/collide_headon.csv}
 methods=${METHODS:-pantz sqp}
 sizes=${*:-16 24 32 48}

@@ -12,11 +12,7 @@
 # unset: pantz, and the CSV has no outer_method column; set: runs go to WORK/NAME-B-M/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ -z "${CONTACTLAB_BIN:-}" ]; then
-  source scripts/ensure-cmake.sh
-  cargo build --release --quiet --bin contactlab
-fi
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 out=${OUT:-results/default_backend_scenes.csv}
 work=${WORK:-runs/default_backend}
 backends=${BACKENDS:-clarabel ip}

@@ -7,8 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 "$bin" sweep experiments/dynamics.toml --out results/dynamics.csv --jobs 1 --resume
 for s in euler newmark; do
   # a run that ends early (Newmark on drop: a sub-problem failed) still writes its directory

@@ -16,7 +16,7 @@
 # delete WORK to redo them all); a run without one gets a row with status `no summary`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 out=${OUT:-results/restart.csv}
 sizes=${*:-40 80 160}
 work=${WORK:-runs/restart}

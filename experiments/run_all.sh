@@ -5,8 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 names=("$@")
 [ ${#names[@]} -gt 0 ] || names=(lemma56 iterations backends tradeoff scaling extremes iterations_methods lemma56_fixed_points)
 for name in "${names[@]}"; do

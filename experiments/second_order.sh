@@ -14,11 +14,7 @@
 # runs/second_order). A run directory that has a summary.json is not run again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ -z "${CONTACTLAB_BIN:-}" ]; then
-  source scripts/ensure-cmake.sh
-  cargo build --release --quiet --bin contactlab
-fi
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 out=${OUT:-results/second_order.csv}
 work=${WORK:-runs/second_order}
 mkdir -p "$work"

@@ -11,8 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/ensure-cmake.sh
 backend=${1:-clarabel}
-[ -n "${CONTACTLAB_BIN:-}" ] || cargo build --release --quiet --bin contactlab
-bin=${CONTACTLAB_BIN:-target/release/contactlab}
+source experiments/contactlab_bin.sh
 scenes=("n80:--n 80" "n40-p1e-2:--n 40 --perturb 0:1e-2")
 cases=("reference:--tol-j 1e-12" "default:" "max_inner=1:--max-inner 1" "max_inner=3:--max-inner 3"
        "max_inner=10:--max-inner 10" "qp_tol=1e-6:--qp-tol 1e-6" "qp_tol=1e-7:--qp-tol 1e-7"
