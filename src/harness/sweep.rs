@@ -955,20 +955,19 @@ fn catch_row<R: RunRow>(run: impl FnOnce() -> Result<R>) -> R {
 
 /// Runs one static spec into its row (never panics: a panic becomes a `panic` row).
 fn run_one(spec: &RunSpec, reference: Option<&Reference>) -> StaticRow {
-    run_one_with(spec, reference, &mut SecondOrderColumns::default())
+    run_one_checked(spec, reference).0
 }
 
-/// [`run_one`], and the second-order check's columns of the run into `cols`.
-fn run_one_with(
+/// [`run_one`], with the second-order check's columns of the run (a sweep file that asks for
+/// the check writes them after the row).
+fn run_one_checked(
     spec: &RunSpec,
     reference: Option<&Reference>,
-    cols: &mut SecondOrderColumns,
-) -> StaticRow {
+) -> (StaticRow, SecondOrderColumns) {
     let t = Instant::now();
-    let mut row = catch_row(|| -> Result<_> {
+    let (mut row, cols) = catch_row(|| -> Result<_> {
         let scene = build_scene(&spec.scene, spec.n, Some(spec.eps), &spec.params)?;
         let o = case::execute(&scene, &spec.settings, &mut |_, _| {})?;
-        *cols = SecondOrderColumns::of_result(&o.res);
         let mut row = StaticRow::of_case(&scene, &o);
         if let Some(r) = reference {
             row.reference_energy = Some(r.energy);
@@ -984,12 +983,12 @@ fn run_one_with(
             .map(|r| r.min_distance)
             .fold(f64::INFINITY, f64::min);
         row.max_violation = Some((scene.eps - worst).max(0.0));
-        Ok(row)
+        Ok((row, SecondOrderColumns::of_result(&o.res)))
     });
     row.h.get_or_insert(spec.h);
     row.eps.get_or_insert(spec.eps);
     row.wall_time_s.get_or_insert(t.elapsed().as_secs_f64());
-    row
+    (row, cols)
 }
 
 /// Runs one dynamic spec into its row (never panics: a panic becomes a `panic` row).
@@ -1105,11 +1104,7 @@ pub fn cmd_sweep(a: &SweepArgs) -> Result<()> {
         sweep_rows(a, &runs, |r, _| run_one_dynamic(r))
     } else if runs.iter().any(|r| r.settings.second_order_max_dofs > 0) {
         // the check's columns after the published ones, only where the file asks for it
-        sweep_rows(a, &runs, |r, refr| {
-            let mut cols = SecondOrderColumns::default();
-            let row = run_one_with(r, refr, &mut cols);
-            (row, cols)
-        })
+        sweep_rows(a, &runs, run_one_checked)
     } else {
         sweep_rows(a, &runs, run_one)
     }
