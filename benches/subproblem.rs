@@ -22,8 +22,8 @@
 //! the outer loop pays once per run, not per step) are not counted.
 //!
 //! Run: `cargo bench --bench subproblem` (criterion; results in `target/criterion/`). Other
-//! sizes: `SUBPROBLEM_SIZES="1600" cargo bench --bench subproblem` (n = 1600 takes about ten
-//! minutes: ten samples of each whole first step). The sizes of the in-contact QP (rows,
+//! sizes: `SUBPROBLEM_SIZES="1600" cargo bench --bench subproblem` (n = 1600 takes about a
+//! quarter of an hour, most of it ten samples of each whole first step). The sizes of the in-contact QP (rows,
 //! entries of `K` and of its factor) are printed to standard error.
 
 use std::time::{Duration, Instant};
@@ -204,7 +204,11 @@ fn bench(c: &mut Criterion) {
             );
         }
         let qp0 = first_qp(&s, &s.x0);
-        assert_eq!(contact_rows(&qp0), 0, "the start has contact rows");
+        assert_eq!(
+            contact_rows(&qp0),
+            0,
+            "the start has contact rows: ldlt_of_p would no longer be the Hessian with them"
+        );
         g.bench_with_input(BenchmarkId::new("ldlt_of_p", n), &qp0, |b, qp| {
             b.iter(|| black_box(SparseLdl::factor(&qp.p).expect("P is definite")))
         });
