@@ -22,8 +22,8 @@
 //! the outer loop pays once per run, not per step) are not counted.
 //!
 //! Run: `cargo bench --bench subproblem` (criterion; results in `target/criterion/`). Other
-//! sizes: `SUBPROBLEM_SIZES="1600" cargo bench --bench subproblem` (n = 1600 takes about a
-//! quarter of an hour, most of it ten samples of each whole first step). The sizes of the in-contact QP (rows,
+//! sizes: `SUBPROBLEM_SIZES="1600" cargo bench --bench subproblem` (n = 1600 takes about twelve
+//! minutes, most of it ten samples of each whole first step). The sizes of the in-contact QP (rows,
 //! entries of `K` and of its factor) are printed to standard error.
 
 use std::time::{Duration, Instant};
