@@ -68,7 +68,7 @@ use crate::contact::{
     min_distance, near_pairs, pair_rows, ContactPair, MinDistance, PairRows, PairSet,
 };
 use crate::energy::Objective;
-use crate::scene::mesh::Mesh;
+use crate::scene::mesh::{BodyKind, Mesh};
 use crate::solve::certificate::gradient_entries;
 use crate::solve::outer::most_violated_per_point;
 use crate::solve::qp_units::solve_in_units;
@@ -222,7 +222,12 @@ pub enum Curvature {
     /// whole `P` definite (the shift is set by the most negative mode).
     Full,
     /// `full` for the pairs whose closest points are inside both elements only (no vertex or
-    /// edge case, whose curvature `μ/d` with `d ≈ ε` is the largest).
+    /// edge case, whose curvature `μ/d` with `d ≈ ε` is the largest), and in 3D without the
+    /// edge–edge pairs of surfaces' and solids' edges (a curve's edges keep theirs): two
+    /// triangulated surfaces in contact meet through their vertex–face pairs, and the
+    /// edge–edge blocks, set by the mesh edges' crossing angles, are the large ones (on
+    /// balloons3d n = 3 they raised the model's shift from about 0.015 to as much as 3.4,
+    /// docs/method.md, "The constraints' curvature (measured)").
     Interior,
     /// Each pair's block restricted to the tangent space of its own constraint,
     /// `(I − ĝĝᵀ)(−μ_k ∇²d_k)(I − ĝĝᵀ)` (`ĝ` the unit gradient of `d_k` on the pair's free
@@ -568,6 +573,9 @@ pub(crate) fn curvature_triplets(
     let mut trip = Vec::new();
     for (pair, m) in pairs {
         if mode == Curvature::Interior {
+            if surface_edge_pair(mesh, pair) {
+                continue;
+            }
             match pair_rows(mesh, x, pair) {
                 Some(r) if r.weight[..r.len].iter().all(|w| *w > 0.0) => {}
                 _ => continue,
@@ -619,6 +627,17 @@ pub(crate) fn curvature_triplets(
         }
     }
     trip
+}
+
+/// An edge–edge pair (3D) with an edge of a surface or of a solid's boundary, not of a curve:
+/// [`Curvature::Interior`] leaves its block out.
+fn surface_edge_pair(mesh: &Mesh, pair: ContactPair) -> bool {
+    match pair {
+        ContactPair::EdgeEdge { a, b } => [a, b]
+            .iter()
+            .any(|&e| mesh.bodies[mesh.edge_body[e]].kind != BodyKind::Curve),
+        _ => false,
+    }
 }
 
 /// `γ ∇d_k ∇d_kᵀ` on dofs (both triangles) for the pairs of `mu` with `μ_k > 0`.
@@ -1677,6 +1696,30 @@ mod tests {
             ],
             ..Default::default()
         }
+    }
+
+    /// `interior` keeps an edge–edge block between two curves' edges and leaves it out where
+    /// an edge is a surface's; `full` keeps it either way.
+    #[test]
+    fn interior_curvature_leaves_out_the_edge_edge_pairs_of_surfaces() {
+        // lower: v0 (0, 0, 0) – v1 (1, 0, 0); upper: v2 (0.5, −0.5, 0.1) – v3 (0.5, 0.5, 0.1),
+        // crossing 0.1 above it, closest points inside both edges
+        let mut mesh = curves(
+            3,
+            vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.5, -0.5, 0.1, 0.5, 0.5, 0.1],
+            2,
+        );
+        let x = mesh.x_ref.clone();
+        let col: Vec<usize> = (0..12).collect();
+        let pair = ContactPair::EdgeEdge { a: 0, b: 1 };
+        let mu: HashMap<ContactPair, f64> = [(pair, 1.0)].into_iter().collect();
+        let blocks = |mesh: &Mesh, mode| curvature_triplets(mesh, &x, &col, &mu, mode);
+        let full = blocks(&mesh, Curvature::Full);
+        assert!(full.iter().any(|t| t.2 != 0.0), "no curvature: {full:?}");
+        assert_eq!(blocks(&mesh, Curvature::Interior), full);
+        mesh.bodies[1].kind = BodyKind::Surface;
+        assert!(blocks(&mesh, Curvature::Interior).is_empty());
+        assert_eq!(blocks(&mesh, Curvature::Full), full);
     }
 
     /// A vertex above the first of two edges meeting at v1 (closest point inside it) is
