@@ -59,8 +59,8 @@
 //! clarabel` (the QP of outer step 58 of 62: 16 893 variables, 3 rows) ran 100 000 iterations in
 //! 417 s with equilibration and ended `AlmostSolved` at an objective of −2.8e-8, which the
 //! residual tests accepted; `ip`, OSQP, Uzawa and Clarabel without equilibration (9
-//! iterations) agree on −9.02e-7 (docs/measurements.md, "The rod's outer steps at n = 128 and
-//! 256").
+//! iterations) agree on −9.02e-7 (docs/measurements.md, "Clarabel's iteration limit and
+//! retry").
 //!
 //! # Retry without equilibration
 //!
@@ -332,12 +332,12 @@ impl Conic {
     }
 }
 
-/// Clarabel's settings for `s`: its tolerances (gap and feasibility), iteration and time
-/// limits, quiet; everything else Clarabel's default.
 /// Most Clarabel iterations per solve, whatever `max_iter` allows: Clarabel's own default
 /// (module documentation, "Iteration limit").
 pub const MAX_CLARABEL_ITERATIONS: usize = 200;
 
+/// Clarabel's settings for `s`: its tolerances (gap and feasibility), iteration limit (at most
+/// [`MAX_CLARABEL_ITERATIONS`]) and time limit, quiet; everything else Clarabel's default.
 fn clarabel_settings(s: &QpSettings) -> DefaultSettings<f64> {
     DefaultSettings::<f64> {
         max_iter: u32::try_from(s.max_iter.min(MAX_CLARABEL_ITERATIONS)).unwrap_or(u32::MAX),
@@ -597,9 +597,10 @@ mod tests {
             eps_rel: 1e-9,
             ..QpSettings::default()
         };
-        // the QP of the rod at n = 256 where Clarabel stalled (docs/known-gaps.md): after
-        // 100 000 iterations its point met the residual tests with objective −2.8e-8 against
-        // the optimum −9.02e-7; at 300 iterations the gap was 4.8e-5
+        // the QP of the rod at n = 256 where Clarabel stalled (docs/measurements.md,
+        // "Clarabel's iteration limit and retry"): at 200 and 300 iterations Clarabel's gap
+        // was 4.8e-5 (measured); its 100 000-iteration point was 8.7e-7 above the optimum
+        // −9.02e-7 in objective, and a gap of that size fails too
         assert!(!gap_closed(3.9125e-5, 3.9125e-5 - 4.78e-5, &s));
         assert!(!gap_closed(-2.8e-8, -9.02e-7, &s));
         assert!(gap_closed(-9.0198e-7, -9.0198e-7 - 1.0e-10, &s));
