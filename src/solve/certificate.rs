@@ -90,6 +90,13 @@ const REFINE_ROUNDS: usize = 3;
 /// the tests stopped at 2.5e-8 of ‖g‖ with `1e-10`, at 9.0e-9 with `1e-13` and `1e-16`).
 const PROX: f64 = 1e-13;
 
+/// [`nnls_dual_qp`] skips its refinement rounds when weak duality ([`dual_gap`]) puts the
+/// first QP's residual within this fraction of the minimum: κ is then an upper bound at most
+/// that far above the least one (its `dual_gap` says how far). Measured on balloons3d n = 4
+/// (3 204 generators, docs/method.md, "The minimality certificate"): one refinement QP took
+/// 468 s to lower the residual by 3e-5 of itself, where the gap allowed 4.6%.
+pub const REFINE_GAP: f64 = 0.1;
+
 /// Distinct generators from which [`certificate`] solves the sparse dual QP instead of the
 /// dense active set (measured: docs/method.md, "The minimality certificate").
 pub const QP_PATH_MIN_GENERATORS: usize = 3000;
@@ -688,7 +695,8 @@ pub(crate) fn nnls_dual_qp(
     // (t = G⁻¹(r₀ − Bν), the new residual), so its error is √tol of ‖r₀‖. A round is kept
     // only if it lowers the residual recomputed from the clipped multipliers; the rounds stop
     // when one does not halve it.
-    if residual > 0.0 {
+    let close = residual > 0.0 && dual_gap(g, cols, &mu, solve) <= REFINE_GAP * residual;
+    if residual > 0.0 && !close {
         let mut gfull: Vec<(usize, usize, f64)> = Vec::with_capacity(2 * gram.nnz() + trip.len());
         for j in 0..gram.ncols {
             for p in gram.colptr[j]..gram.colptr[j + 1] {
@@ -1239,8 +1247,10 @@ mod tests {
     fn certificate_dual_qp_is_an_upper_bound_close_to_the_minimum() {
         // The sparse path on the random problems of the enumeration test: its residual,
         // recomputed from non-negative multipliers, is never below the minimum (round-off
-        // aside) and close to it: measured at most 9.5e-12 ‖g‖ above, asserted 1e-10.
-        let mut worst = 0.0f64;
+        // aside) and close to it: refined, at most 1e-10 ‖g‖ above (measured 9.5e-12 before
+        // the refinement could be skipped); where weak duality let it skip the refinement,
+        // at most `REFINE_GAP` of itself above.
+        let (mut worst, mut worst_rel) = (0.0f64, 0.0f64);
         for (trial, (gm, g, cols, brute)) in random_problems().into_iter().enumerate() {
             let s = run_dual_qp(&gm, &g, &cols);
             let gn = hm1(&gm, &g);
@@ -1251,14 +1261,17 @@ mod tests {
                 s.residual
             );
             assert!(
-                s.residual <= brute + 1e-10 * gn,
+                s.residual - brute <= (1e-10 * gn).max(REFINE_GAP * s.residual),
                 "trial {trial}: dual QP {} vs enumeration {brute}",
                 s.residual
             );
             assert_eq!(s.unresolved, 0, "trial {trial}");
             worst = worst.max((s.residual - brute) / gn);
+            worst_rel = worst_rel.max((s.residual - brute) / s.residual.max(f64::MIN_POSITIVE));
         }
-        eprintln!("dual QP above the minimum by at most {worst:e} of ||g||");
+        eprintln!(
+            "dual QP above the minimum by at most {worst:e} of ||g||, {worst_rel:e} of itself"
+        );
     }
 
     #[test]
