@@ -55,8 +55,9 @@
 //! [`QP_PATH_MIN_GENERATORS`] distinct generators on, the problem is solved by its dual, a
 //! sparse QP in the backends' standard form ([`nnls_dual_qp`]: `min ½wᵀGw − J'ᵀw` s.t.
 //! `Bᵀw ≤ 0`, whose row multipliers are μ), by the registry's [`CERTIFICATE_BACKEND`] at
-//! [`CERTIFICATE_TOL`], with refinement rounds; nothing `k × k` is formed. Its residual too is
-//! recomputed from the multipliers clipped to `≥ 0`, so it is an upper bound of the minimum
+//! [`CERTIFICATE_TOL`], with refinement rounds (skipped where weak duality already puts the
+//! first QP within [`REFINE_GAP`] of the minimum); nothing `k × k` is formed. Its residual
+//! too is recomputed from the multipliers clipped to `≥ 0`, so it is an upper bound of the minimum
 //! whatever the backend returned. `dual_gap` reports, for either path, how far the residual
 //! can be above the minimum by weak duality.
 
@@ -593,9 +594,10 @@ pub(crate) struct Nnls {
 /// `Bᵀw ≤ 0` has the NNLS multipliers as its row multipliers and `w* = G⁻¹(g − Bμ*)`. It is
 /// solved in units where `‖g‖_∞ = 1` and with each row `b_j` divided by its Euclidean norm
 /// (the backends' tolerances are absolute, or relative to `max(1, ·)`), by the registered
-/// backend `backend` at `tol`, then refined by at most [`REFINE_ROUNDS`] rounds (in the
-/// body: the first QP's residual is accurate to about `√tol·‖g‖` only). Nothing `k × k` is
-/// formed: the QPs hold `G` and `B`.
+/// backend `backend` at `tol`, then refined by at most [`REFINE_ROUNDS`] rounds (in the body:
+/// the first QP's residual is accurate to about `√tol·‖g‖` only), unless [`dual_gap`] already
+/// puts that residual within [`REFINE_GAP`] of the minimum. Nothing `k × k` is formed: the QPs
+/// hold `G` and `B`.
 ///
 /// The multipliers are then clipped to `≥ 0` (a NaN to 0), and the residual is recomputed
 /// from them with the factor of `G`: whatever the backend returned, it is the residual of
