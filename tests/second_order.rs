@@ -88,6 +88,18 @@ fn second_order_rod_certified_state_is_not_a_minimum() {
     let hist = std::fs::read_to_string(d.join("history.csv")).unwrap();
     let escape_rows = hist.lines().filter(|l| l.contains(",escape,")).count();
     assert_eq!(escape_rows as u64, e["escapes"].as_u64().unwrap());
+    // every certificate the run computed is counted, at the saddle and at the end at least,
+    // and `certificate.seconds` is the last one's share of their total
+    let calls = e["certificate_calls"].as_u64().unwrap();
+    assert!(
+        calls > e["escapes"].as_u64().unwrap(),
+        "{calls} certificates"
+    );
+    let total = e["certificate_seconds"].as_f64().unwrap();
+    assert!(
+        total >= e["certificate"]["seconds"].as_f64().unwrap(),
+        "{total} s"
+    );
 }
 
 #[test]

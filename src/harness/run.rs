@@ -317,6 +317,10 @@ struct Summary {
     diagnostics: Option<DiagSummary>,
     /// The minimality certificate at the returned state (every run).
     certificate: Certificate,
+    /// Certificates the run computed (the endgame's checks and the returned state's) and
+    /// their seconds in all: `certificate.seconds` is the last one's only.
+    certificate_calls: usize,
+    certificate_seconds: f64,
     /// The second-order check at the returned state (`converged` runs: a KKT point;
     /// docs/method.md, "The second-order check").
     second_order: Option<SecondOrder>,
@@ -865,6 +869,8 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     };
     let summary = Summary {
         certificate: res.certificate.clone(),
+        certificate_calls: res.certificate_calls,
+        certificate_seconds: res.certificate_seconds,
         second_order: res.second_order.clone(),
         escapes: res.escapes,
         escape_saddles: settings.escape_saddles,

@@ -365,6 +365,12 @@ pub struct RunResult {
     pub multipliers: Vec<[f64; 4]>,
     /// The minimality certificate at φ (computed once, at the end, whatever the status).
     pub certificate: Certificate,
+    /// How many times the run computed the certificate (the SQP endgame's stopping checks,
+    /// the states it compares, and the returned state).
+    pub certificate_calls: usize,
+    /// The seconds those computations took in all ([`Certificate::seconds`] is the last
+    /// one's only).
+    pub certificate_seconds: f64,
     /// Wall time of the whole loop (the certificate included).
     pub wall_time_s: f64,
     /// The final polish at ε ([`OuterSettings::polish`]), when it ran.
@@ -963,9 +969,13 @@ fn outer_loop(
     let scale_floor = CERTIFICATE_SCALE_FLOOR * e_scale / norms.free.ell;
     // The certificate at a state, from the multipliers by pair of its last sub-problem.
     let active_tol = certificate_active_tol(settings, eps, norms.free.ell);
+    let cert_time = std::cell::Cell::new((0usize, 0.0f64));
     let certify = |x: &[f64], warm: &HashMap<ContactPair, f64>| {
-        certificate(mesh, energy, x, eps, active_tol, &norms, warm)
-            .map(|c| with_scale_floor(c, scale_floor))
+        let t = Instant::now();
+        let c = certificate(mesh, energy, x, eps, active_tol, &norms, warm);
+        let (calls, seconds) = cert_time.get();
+        cert_time.set((calls + 1, seconds + t.elapsed().as_secs_f64()));
+        c.map(|c| with_scale_floor(c, scale_floor))
     };
     let hbar = median_edge_length(mesh, x0);
     let roundoff = roundoff_allowance(x0);
@@ -996,6 +1006,8 @@ fn outer_loop(
         last_rows: Vec::new(),
         multipliers: Vec::new(),
         certificate: Certificate::default(),
+        certificate_calls: 0,
+        certificate_seconds: 0.0,
         wall_time_s: 0.0,
         polish: None,
         psi: Vec::new(),
@@ -1441,6 +1453,7 @@ fn outer_loop(
         break 'escape;
     }
     result.x = x;
+    (result.certificate_calls, result.certificate_seconds) = cert_time.get();
     result.wall_time_s = start.elapsed().as_secs_f64();
     observer.finish(&result);
     Ok(result)
