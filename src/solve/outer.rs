@@ -363,7 +363,8 @@ pub struct RunResult {
     pub last_rows: Vec<PairRows>,
     /// Multipliers of the last sub-problem (`μ ≥ 0`, one per row of each pair).
     pub multipliers: Vec<[f64; 4]>,
-    /// The minimality certificate at φ (computed once, at the end, whatever the status).
+    /// The minimality certificate at φ (the last one computed, at the returned state, whatever
+    /// the status).
     pub certificate: Certificate,
     /// How many times the run computed the certificate (the SQP endgame's stopping checks,
     /// the states it compares, and the returned state).
