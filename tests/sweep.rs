@@ -346,3 +346,51 @@ fn scaling_rerun_skips_the_cases_in_its_csv() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("in the CSV, skipped"));
     assert_eq!(lines(&d.join("s.csv")).len(), 1);
 }
+
+/// Every committed sweep file (`experiments/*.toml`) still loads with today's code: its keys and
+/// values are accepted and its runs expand (no key twice), each names a known scene, and for
+/// each static scene and parameter set the smallest level the file asks for builds at its ε.
+/// So `contactlab sweep experiments/NAME.toml` cannot fail at start on a file the README and
+/// results/README.md cite.
+#[test]
+fn every_committed_sweep_file_loads_and_its_scenes_build() {
+    use contactlab::harness::sweep;
+    use contactlab::scene::registry;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(
+        files.len() >= 20,
+        "only {} sweep files in {dir:?}",
+        files.len()
+    );
+    for f in &files {
+        let runs = sweep::load(f).unwrap_or_else(|e| panic!("{f:?}: {e:#}"));
+        assert!(!runs.is_empty(), "{f:?}: no runs");
+        // The smallest level of each static (scene, parameters) pair.
+        let mut smallest: BTreeMap<String, &sweep::RunSpec> = BTreeMap::new();
+        for r in &runs {
+            assert!(
+                registry::scene(&r.scene).is_some(),
+                "{f:?}: run {} names an unknown scene",
+                r.key
+            );
+            if r.dynamic.is_some() {
+                continue;
+            }
+            let id = format!("{}|{:?}", r.scene, r.params);
+            let e = smallest.entry(id).or_insert(r);
+            if r.n < e.n {
+                *e = r;
+            }
+        }
+        for r in smallest.values() {
+            registry::build_scene(&r.scene, r.n, Some(r.eps), &r.params)
+                .unwrap_or_else(|e| panic!("{f:?}: run {} does not build: {e:#}", r.key));
+        }
+    }
+}
