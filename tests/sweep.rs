@@ -350,8 +350,8 @@ fn scaling_rerun_skips_the_cases_in_its_csv() {
 /// Every committed sweep file (`experiments/*.toml`) still loads with today's code: its keys and
 /// values are accepted and its runs expand (no key twice), each names a known scene, and for
 /// each static scene and parameter set the smallest level the file asks for builds at its ε.
-/// So `contactlab sweep experiments/NAME.toml` cannot fail at start on a file the README and
-/// results/README.md cite.
+/// So `contactlab sweep experiments/NAME.toml` does not fail at start on a key, a value or a
+/// scene name of a file the README and results/README.md cite.
 #[test]
 fn every_committed_sweep_file_loads_and_its_scenes_build() {
     use contactlab::harness::sweep;
