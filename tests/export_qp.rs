@@ -52,6 +52,8 @@ fn exported_qps_files_read_back_to_the_solved_qps() {
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
+        sqp_normal_active_rel: 0.0,
+        sqp_edge_edge_stiffness: 0.0,
         second_order_max_dofs: 0,
         escape_saddles: false,
         time_limit_s: None,

@@ -792,6 +792,26 @@ fn scenefiles_solver_sqp_model_keys_apply_and_flags_override_them() {
             "--sqp-extrapolate 3 set with the auto outer method",
         ),
         (
+            &["--outer-method", "auto", "--sqp-edge-edge-stiffness", "100"][..],
+            "refused_ring_auto_edge_edge",
+            "--sqp-edge-edge-stiffness 100 set with the auto outer method",
+        ),
+        (
+            &[
+                "--outer-method",
+                "pantz",
+                "--sqp-normal-active-rel",
+                "0.001",
+            ][..],
+            "refused_ring_active_rel",
+            "--sqp-normal-active-rel 0.001 set with the pantz outer method",
+        ),
+        (
+            &["--outer-method", "sqp", "--sqp-normal-active-rel", "2"][..],
+            "refused_ring_active_rel_range",
+            "--sqp-normal-active-rel must be in [0, 1], got 2",
+        ),
+        (
             &["--outer-method", "sqp", "--sqp-implying-rows"][..],
             "refused_ring_implying",
             "--sqp-implying-rows set without --sqp-drop-endpoint-rows or --sqp-drop-vertex-rows",

@@ -64,6 +64,12 @@ pub struct CaseSettings {
     pub sqp_implying_rows: bool,
     /// SQP: extrapolations of a full step (2, 4, …, 2^k times it; 0: none).
     pub sqp_extrapolate: usize,
+    /// SQP: the normal stiffness only on the pairs whose last multiplier is at least this
+    /// fraction of the largest (0: every positive one).
+    pub sqp_normal_active_rel: f64,
+    /// SQP: `interior` keeps surfaces' edge–edge pairs, with this factor on their normal
+    /// stiffness (0: left out).
+    pub sqp_edge_edge_stiffness: f64,
     /// The second-order check of a `converged` run up to this many free dofs (0: none;
     /// [`OuterSettings::second_order_max_dofs`]).
     pub second_order_max_dofs: usize,
@@ -167,6 +173,8 @@ pub fn outer_settings(cs: &CaseSettings) -> OuterSettings {
     settings.sqp.path_rows = cs.sqp_path_rows;
     settings.sqp.implying_rows = cs.sqp_implying_rows;
     settings.sqp.extrapolate = cs.sqp_extrapolate;
+    settings.sqp.normal_active_rel = cs.sqp_normal_active_rel;
+    settings.sqp.edge_edge_stiffness = cs.sqp_edge_edge_stiffness;
     settings.second_order_max_dofs = cs.second_order_max_dofs;
     settings.escape_saddles = cs.escape_saddles;
     settings

@@ -185,6 +185,8 @@ fn run_prepared(
         sqp_path_rows: rs.sqp_path_rows,
         sqp_implying_rows: rs.sqp_implying_rows,
         sqp_extrapolate: rs.sqp_extrapolate,
+        sqp_normal_active_rel: rs.sqp_normal_active_rel,
+        sqp_edge_edge_stiffness: rs.sqp_edge_edge_stiffness,
         second_order_max_dofs: 0,
         escape_saddles: false,
     };

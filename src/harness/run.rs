@@ -169,6 +169,17 @@ pub struct RunArgs {
     /// (docs/method.md, "Extrapolating a full step"; 0: off).
     #[arg(long, default_value_t = 0)]
     pub sqp_extrapolate: usize,
+    /// SQP: the normal stiffness (--sqp-normal-stiffness) only on the pairs whose multiplier at
+    /// the last step is at least this fraction of the largest, in [0, 1] (0: every pair with a
+    /// positive multiplier, which with an interior-point backend is every pair of the last
+    /// QP). docs/method.md, "The contact terms from the pairs in contact".
+    #[arg(long, default_value_t = 0.0)]
+    pub sqp_normal_active_rel: f64,
+    /// SQP: with --sqp-curvature interior, keep the edge–edge pairs of surfaces' and solids'
+    /// edges and give them F times the normal stiffness (0: left out). docs/method.md, "The
+    /// contact terms from the pairs in contact".
+    #[arg(long, default_value_t = 0.0)]
+    pub sqp_edge_edge_stiffness: f64,
     /// Accuracy preset: low, default or high (QP tolerance per backend and tol_J; docs/method.md,
     /// "Accuracy presets"). --qp-tol and --tol-j override its values.
     #[arg(long, default_value = "default", value_parser = parse_accuracy)]
@@ -455,6 +466,8 @@ fn scene_from_file(
     from_file!("sqp_path_rows", sqp_path_rows);
     from_file!("sqp_implying_rows", sqp_implying_rows);
     from_file!("sqp_extrapolate", sqp_extrapolate);
+    from_file!("sqp_normal_active_rel", sqp_normal_active_rel);
+    from_file!("sqp_edge_edge_stiffness", sqp_edge_edge_stiffness);
     let params = serde_json::json!({
         "scene_file": a.scene,
         "bodies": f.body_names,
@@ -491,6 +504,8 @@ impl RunArgs {
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
+            sqp_normal_active_rel: self.sqp_normal_active_rel,
+            sqp_edge_edge_stiffness: self.sqp_edge_edge_stiffness,
         }
     }
 }
@@ -546,6 +561,16 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 settings.sqp_extrapolate != 0,
                 settings.sqp_extrapolate.to_string(),
             ),
+            (
+                "--sqp-normal-active-rel",
+                settings.sqp_normal_active_rel != 0.0,
+                settings.sqp_normal_active_rel.to_string(),
+            ),
+            (
+                "--sqp-edge-edge-stiffness",
+                settings.sqp_edge_edge_stiffness != 0.0,
+                settings.sqp_edge_edge_stiffness.to_string(),
+            ),
         ]
         .into_iter()
         .filter_map(|(flag, set, v)| set.then(|| format!("{flag} {v}").trim_end().to_string()))
@@ -555,7 +580,7 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
                 "{} set with the {} outer method: the SQP model's settings (--sqp-curvature, \
                  --sqp-normal-stiffness, --sqp-drop-endpoint-rows, --sqp-extend-rows, --sqp-extend-fixed, \
                  --sqp-drop-vertex-rows, --sqp-drop-side-rows, --sqp-path-rows, --sqp-implying-rows, --sqp-extrapolate, \
-                 or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only \
+                 --sqp-normal-active-rel, --sqp-edge-edge-stiffness, or the same keys with underscores in a scene file's [solver]) apply to --outer-method sqp only \
                  (auto's SQP phase takes the one command line's, docs/method.md)",
                 set.join(" and "),
                 settings.outer_method.as_str()
@@ -598,6 +623,12 @@ pub(crate) fn validate_cli(settings: &RunSettings) -> Result<()> {
         "tol_j" => anyhow!("--tol-j must be > 0, got {v}"),
         "sqp_normal_stiffness" => {
             anyhow!("--sqp-normal-stiffness must be finite and >= 0, got {v}")
+        }
+        "sqp_normal_active_rel" => {
+            anyhow!("--sqp-normal-active-rel must be in [0, 1], got {v}")
+        }
+        "sqp_edge_edge_stiffness" => {
+            anyhow!("--sqp-edge-edge-stiffness must be finite and >= 0, got {v}")
         }
         _ => e.into(),
     })

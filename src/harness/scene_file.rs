@@ -181,6 +181,12 @@ fn fill(spec: &SolverSpec, settings: &mut RunSettings) {
     if let Some(v) = spec.sqp_extrapolate {
         s.sqp_extrapolate = v;
     }
+    if let Some(v) = spec.sqp_normal_active_rel {
+        s.sqp_normal_active_rel = v;
+    }
+    if let Some(v) = spec.sqp_edge_edge_stiffness {
+        s.sqp_edge_edge_stiffness = v;
+    }
     s.tol_j = spec.tol_j.or(s.tol_j);
     s.qp_tol = spec.qp_tol.or(s.qp_tol);
 }

@@ -222,6 +222,13 @@ pub struct Common {
     /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check passes
     /// (default 0: off; with `outer_method = "sqp"` only).
     pub sqp_extrapolate: Option<usize>,
+    /// SQP: the normal stiffness only on the pairs whose last multiplier is at least this
+    /// fraction of the largest (default 0: every positive one; with `outer_method = "sqp"`
+    /// only).
+    pub sqp_normal_active_rel: Option<f64>,
+    /// SQP: `interior` keeps surfaces' edge–edge pairs, with this factor on their normal
+    /// stiffness (default 0: left out; with `outer_method = "sqp"` only).
+    pub sqp_edge_edge_stiffness: Option<f64>,
     /// The second-order check of each `converged` run up to this many free dofs (default 0:
     /// none; `contactlab run`'s default is 1 200): the columns `second_order`,
     /// `min_eigenvalue_rel`, `free_dofs`, `escapes` (static runs only).
@@ -436,6 +443,8 @@ struct BlockSettings {
     sqp_path_rows: bool,
     sqp_implying_rows: bool,
     sqp_extrapolate: usize,
+    sqp_normal_active_rel: f64,
+    sqp_edge_edge_stiffness: f64,
     second_order_max_dofs: usize,
     escape_saddles: bool,
     reference: Option<ReferenceSpec>,
@@ -510,6 +519,8 @@ impl BlockSettings {
         let sqp_path_rows = key!(sqp_path_rows, false);
         let sqp_implying_rows = key!(sqp_implying_rows, false);
         let sqp_extrapolate = key!(sqp_extrapolate, 0);
+        let sqp_normal_active_rel = key!(sqp_normal_active_rel, 0.0);
+        let sqp_edge_edge_stiffness = key!(sqp_edge_edge_stiffness, 0.0);
         let second_order_max_dofs = key!(second_order_max_dofs, 0);
         let escape_saddles = key!(escape_saddles, false);
         if b.dynamic && (second_order_max_dofs != 0 || escape_saddles) {
@@ -538,6 +549,8 @@ impl BlockSettings {
                 max_inner: max_inner.unwrap_or(RunSettings::default().max_inner),
                 time_limit_s,
                 sqp_normal_stiffness,
+                sqp_normal_active_rel,
+                sqp_edge_edge_stiffness,
                 ..RunSettings::default()
             };
             if let Err(e) = rs.validate() {
@@ -566,6 +579,8 @@ impl BlockSettings {
                 ("sqp_path_rows", sqp_path_rows),
                 ("sqp_implying_rows", sqp_implying_rows),
                 ("sqp_extrapolate", sqp_extrapolate != 0),
+                ("sqp_normal_active_rel", sqp_normal_active_rel != 0.0),
+                ("sqp_edge_edge_stiffness", sqp_edge_edge_stiffness != 0.0),
             ]
             .into_iter()
             .filter_map(|(k, set)| set.then_some(k))
@@ -575,8 +590,8 @@ impl BlockSettings {
                     "{at}: {} set with outer_method = {:?}: sqp_curvature, \
                      sqp_normal_stiffness, sqp_drop_endpoint_rows, sqp_extend_rows, \
                      sqp_drop_vertex_rows, sqp_drop_side_rows, sqp_extend_fixed, sqp_path_rows, \
-                     sqp_implying_rows and \
-                     sqp_extrapolate apply to outer_method = \"sqp\" only (auto's SQP phase \
+                     sqp_implying_rows, sqp_extrapolate, sqp_normal_active_rel and \
+                     sqp_edge_edge_stiffness apply to outer_method = \"sqp\" only (auto's SQP phase \
                      takes the one command line's)",
                     set.join(" and "),
                     outer_method.as_str()
@@ -644,6 +659,8 @@ impl BlockSettings {
             sqp_path_rows,
             sqp_implying_rows,
             sqp_extrapolate,
+            sqp_normal_active_rel,
+            sqp_edge_edge_stiffness,
             second_order_max_dofs,
             escape_saddles,
             reference,
@@ -683,6 +700,8 @@ impl BlockSettings {
             sqp_path_rows: self.sqp_path_rows,
             sqp_implying_rows: self.sqp_implying_rows,
             sqp_extrapolate: self.sqp_extrapolate,
+            sqp_normal_active_rel: self.sqp_normal_active_rel,
+            sqp_edge_edge_stiffness: self.sqp_edge_edge_stiffness,
             second_order_max_dofs: self.second_order_max_dofs,
             escape_saddles: self.escape_saddles,
         };
@@ -714,7 +733,7 @@ impl BlockSettings {
 fn run_key(spec: &RunSpec) -> String {
     let s = &spec.settings;
     format!(
-        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}",
+        "{}{}|{}|{}|{}|tolj={}|max={}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}{}",
         spec.group_key(),
         spec.dynamic.as_ref().map_or(String::new(), |d| format!(
             "|dt={:?}|steps={}|{}",
@@ -785,6 +804,16 @@ fn run_key(spec: &RunSpec) -> String {
             String::new()
         } else {
             format!("|extrapolate={}", s.sqp_extrapolate)
+        },
+        if s.sqp_normal_active_rel == 0.0 {
+            String::new()
+        } else {
+            format!("|normal-active={:?}", s.sqp_normal_active_rel)
+        },
+        if s.sqp_edge_edge_stiffness == 0.0 {
+            String::new()
+        } else {
+            format!("|edge-edge={:?}", s.sqp_edge_edge_stiffness)
         },
         if s.second_order_max_dofs == 0 {
             String::new()
@@ -1054,6 +1083,8 @@ fn solve_reference(spec: &RunSpec, r: &ReferenceSpec) -> Result<Reference> {
         sqp_path_rows: false,
         sqp_implying_rows: false,
         sqp_extrapolate: 0,
+        sqp_normal_active_rel: 0.0,
+        sqp_edge_edge_stiffness: 0.0,
         // no second-order check: the reference's J is what the error columns read
         second_order_max_dofs: 0,
         escape_saddles: false,
@@ -1438,6 +1469,33 @@ mod tests {
         assert_eq!(
             runs[0].key,
             format!("{plain}|method=sqp|drop-vertex-rows|implying-rows")
+        );
+        let runs = ring(
+            "outer_method = \"sqp\"\nsqp_normal_active_rel = 0.001\nsqp_edge_edge_stiffness = 100",
+        )
+        .unwrap();
+        let o = case::outer_settings(&runs[0].settings);
+        assert_eq!(
+            (o.sqp.normal_active_rel, o.sqp.edge_edge_stiffness),
+            (0.001, 100.0)
+        );
+        assert_eq!(
+            runs[0].key,
+            format!("{plain}|method=sqp|normal-active=0.001|edge-edge=100.0")
+        );
+        let err = ring("sqp_edge_edge_stiffness = 100")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("sqp_edge_edge_stiffness set with outer_method = \"auto\""),
+            "{err}"
+        );
+        let err = ring("outer_method = \"sqp\"\nsqp_normal_active_rel = 2")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("sqp_normal_active_rel = 2 must be in [0, 1]"),
+            "{err}"
         );
         let runs = ring("outer_method = \"sqp\"\nsqp_extend_rows = true\nsqp_extend_fixed = true")
             .unwrap();

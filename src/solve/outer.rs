@@ -22,7 +22,8 @@ use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::second_order::{second_order, SecondOrder};
 use crate::solve::sqp::{
-    sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_CREEP_RATIO, AUTO_PANTZ_STEPS,
+    sqp_step, OuterMethod, SqpContext, SqpSettings, SqpStep, AUTO_CREEP_RATIO,
+    AUTO_EDGE_EDGE_STIFFNESS, AUTO_NORMAL_ACTIVE_REL, AUTO_PANTZ_STEPS,
 };
 use crate::solve::subproblem::row_offsets;
 use crate::solve::subproblem::{
@@ -864,13 +865,19 @@ fn polish_accepted(step: &Step, jx: f64) -> bool {
         && !sub.timed_out
 }
 
-/// [`OuterMethod::Auto`]'s SQP phase: the run's settings with [`SqpSettings::one_line`] and,
-/// where the run's Newton model is `shifted` (the default), `shifted-tight` (the one command
-/// line's; docs/method.md).
+/// [`OuterMethod::Auto`]'s SQP phase: the run's settings with [`SqpSettings::one_line`], the
+/// normal stiffness on the pairs in contact only ([`AUTO_NORMAL_ACTIVE_REL`]), surfaces'
+/// edge–edge pairs in `interior` ([`AUTO_EDGE_EDGE_STIFFNESS`]) and, where the run's Newton
+/// model is `shifted` (the default), `shifted-tight` (the one command line's; docs/method.md,
+/// "The contact terms from the pairs in contact").
 fn auto_sqp_settings(settings: &OuterSettings) -> OuterSettings {
     let mut s = settings.clone();
     s.method = OuterMethod::Sqp;
-    s.sqp = SqpSettings::one_line();
+    s.sqp = SqpSettings {
+        normal_active_rel: AUTO_NORMAL_ACTIVE_REL,
+        edge_edge_stiffness: AUTO_EDGE_EDGE_STIFFNESS,
+        ..SqpSettings::one_line()
+    };
     if s.inner.hessian_model == HessianModel::Shifted {
         s.inner.hessian_model = HessianModel::ShiftedTight;
     }

@@ -156,6 +156,12 @@ pub struct RunSettings {
     /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check
     /// passes (`--sqp-extrapolate k`; 0: off).
     pub sqp_extrapolate: usize,
+    /// SQP: the normal stiffness only on the pairs whose last multiplier is at least this
+    /// fraction of the largest (`--sqp-normal-active-rel`; 0: every positive one; in [0, 1]).
+    pub sqp_normal_active_rel: f64,
+    /// SQP: `interior` keeps surfaces' edge–edge pairs, with this factor on their normal
+    /// stiffness (`--sqp-edge-edge-stiffness`; 0: left out; finite, ≥ 0).
+    pub sqp_edge_edge_stiffness: f64,
 }
 
 impl Default for RunSettings {
@@ -185,6 +191,8 @@ impl Default for RunSettings {
             sqp_path_rows: outer.sqp.path_rows,
             sqp_implying_rows: outer.sqp.implying_rows,
             sqp_extrapolate: outer.sqp.extrapolate,
+            sqp_normal_active_rel: outer.sqp.normal_active_rel,
+            sqp_edge_edge_stiffness: outer.sqp.edge_edge_stiffness,
         }
     }
 }
@@ -202,6 +210,8 @@ pub enum Rule {
     FiniteNonNegative,
     /// Must be > 0 (not NaN).
     Positive,
+    /// Must be in [0, 1].
+    UnitInterval,
 }
 
 impl std::fmt::Display for Rule {
@@ -212,6 +222,7 @@ impl std::fmt::Display for Rule {
             Rule::FinitePositive => write!(f, "must be finite and > 0"),
             Rule::FiniteNonNegative => write!(f, "must be finite and ≥ 0"),
             Rule::Positive => write!(f, "must be > 0"),
+            Rule::UnitInterval => write!(f, "must be in [0, 1]"),
         }
     }
 }
@@ -223,7 +234,8 @@ impl std::fmt::Display for Rule {
 #[error("{key} = {value}: {rule}")]
 pub struct SettingsError {
     /// The key: `backend`, `qp_tol`, `max_outer`, `max_inner`, `lazy_start`, `trust_delta0`,
-    /// `time_limit_s`, `tol_j` or `sqp_normal_stiffness`.
+    /// `time_limit_s`, `tol_j`, `sqp_normal_stiffness`, `sqp_normal_active_rel` or
+    /// `sqp_edge_edge_stiffness`.
     pub key: &'static str,
     /// The value, printed (a backend name quoted).
     pub value: String,
@@ -234,7 +246,7 @@ pub struct SettingsError {
 impl RunSettings {
     /// Checks every key, naming the first bad one (in the order of the fields' checks:
     /// backend, qp_tol, max_outer, max_inner, lazy_start, trust_delta0, time_limit_s, tol_j,
-    /// sqp_normal_stiffness).
+    /// sqp_normal_stiffness, sqp_normal_active_rel, sqp_edge_edge_stiffness).
     pub fn validate(&self) -> Result<(), SettingsError> {
         let err = |key, value: String, rule| Err(SettingsError { key, value, rule });
         let finite_pos = |v: f64| v > 0.0 && v.is_finite();
@@ -275,6 +287,18 @@ impl RunSettings {
             return err(
                 "sqp_normal_stiffness",
                 g.to_string(),
+                Rule::FiniteNonNegative,
+            );
+        }
+        let r = self.sqp_normal_active_rel;
+        if !(0.0..=1.0).contains(&r) {
+            return err("sqp_normal_active_rel", r.to_string(), Rule::UnitInterval);
+        }
+        let f = self.sqp_edge_edge_stiffness;
+        if !(f >= 0.0 && f.is_finite()) {
+            return err(
+                "sqp_edge_edge_stiffness",
+                f.to_string(),
                 Rule::FiniteNonNegative,
             );
         }
@@ -325,6 +349,8 @@ impl RunSettings {
         settings.sqp.path_rows = self.sqp_path_rows;
         settings.sqp.implying_rows = self.sqp_implying_rows;
         settings.sqp.extrapolate = self.sqp_extrapolate;
+        settings.sqp.normal_active_rel = self.sqp_normal_active_rel;
+        settings.sqp.edge_edge_stiffness = self.sqp_edge_edge_stiffness;
         settings.time_limit_s = self.time_limit_s;
         settings
     }
@@ -394,6 +420,18 @@ mod tests {
         assert_eq!(
             bad(&|s| s.sqp_normal_stiffness = -0.5),
             "sqp_normal_stiffness = -0.5: must be finite and ≥ 0"
+        );
+        assert_eq!(
+            bad(&|s| s.sqp_normal_active_rel = 1.5),
+            "sqp_normal_active_rel = 1.5: must be in [0, 1]"
+        );
+        assert_eq!(
+            bad(&|s| s.sqp_normal_active_rel = f64::NAN),
+            "sqp_normal_active_rel = NaN: must be in [0, 1]"
+        );
+        assert_eq!(
+            bad(&|s| s.sqp_edge_edge_stiffness = f64::INFINITY),
+            "sqp_edge_edge_stiffness = inf: must be finite and ≥ 0"
         );
         assert_eq!(
             bad(&|s| s.sqp_normal_stiffness = f64::NAN),

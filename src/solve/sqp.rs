@@ -78,6 +78,16 @@ use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::time::Instant;
 
+/// `auto`'s SQP phase's [`SqpSettings::normal_active_rel`]: a pair is in contact when its
+/// multiplier is at least this fraction of the largest (an interior-point backend leaves the
+/// rows far from binding duals many orders below that; docs/method.md, "The contact terms
+/// from the pairs in contact").
+pub const AUTO_NORMAL_ACTIVE_REL: f64 = 1e-3;
+
+/// `auto`'s SQP phase's [`SqpSettings::edge_edge_stiffness`] (docs/method.md, "The contact
+/// terms from the pairs in contact").
+pub const AUTO_EDGE_EDGE_STIFFNESS: f64 = 100.0;
+
 /// Which outer method the run uses (docs/method.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -203,6 +213,16 @@ pub struct SqpSettings {
     /// every test of the line search and lowers J below the last accepted one; keep the last
     /// accepted (`--sqp-extrapolate k`; 0: off).
     pub extrapolate: usize,
+    /// The normal stiffness applies to the pairs whose multiplier at the last step is at
+    /// least this fraction of the largest (`--sqp-normal-active-rel r`; 0: every pair with a
+    /// positive multiplier, which with an interior-point backend is every pair of the last
+    /// QP, since such a backend leaves every row a positive dual).
+    pub normal_active_rel: f64,
+    /// 0: [`Curvature::Interior`] leaves out the edge–edge pairs of surfaces' and solids'
+    /// edges. `f > 0`: it keeps them, and their normal stiffness is `f·γ`
+    /// (`--sqp-edge-edge-stiffness f`; docs/method.md, "The contact terms from the pairs in
+    /// contact").
+    pub edge_edge_stiffness: f64,
 }
 
 /// Whether and how the SQP model carries the constraints' curvature `−Σ_k μ_k ∇²d_k`, the
@@ -359,6 +379,8 @@ impl Default for SqpSettings {
             path_rows: false,
             implying_rows: false,
             extrapolate: 0,
+            normal_active_rel: 0.0,
+            edge_edge_stiffness: 0.0,
         }
     }
 }
@@ -553,12 +575,15 @@ fn add_free(x: &[f64], s: &[f64], col: &[usize], scale: f64) -> Vec<f64> {
 /// order (deterministic), each projected to its PSD part for [`Curvature::Psd`]. Pairs without
 /// a Hessian ([`crate::contact::hessian`]: parallel edges, degenerate faces) are left out.
 /// `mode` is a resolved one ([`Curvature::resolve`]); an unresolved `auto` adds nothing.
+/// `surface_edge_edge`: [`Curvature::Interior`] keeps the edge–edge pairs of surfaces' and
+/// solids' edges ([`SqpSettings::edge_edge_stiffness`] > 0).
 pub(crate) fn curvature_triplets(
     mesh: &Mesh,
     x: &[f64],
     col: &[usize],
     mu: &HashMap<ContactPair, f64>,
     mode: Curvature,
+    surface_edge_edge: bool,
 ) -> Vec<(usize, usize, f64)> {
     if mode == Curvature::Off || mode == Curvature::Auto {
         return Vec::new();
@@ -573,7 +598,7 @@ pub(crate) fn curvature_triplets(
     let mut trip = Vec::new();
     for (pair, m) in pairs {
         if mode == Curvature::Interior {
-            if surface_edge_pair(mesh, pair) {
+            if !surface_edge_edge && surface_edge_pair(mesh, pair) {
                 continue;
             }
             match pair_rows(mesh, x, pair) {
@@ -640,20 +665,29 @@ fn surface_edge_pair(mesh: &Mesh, pair: ContactPair) -> bool {
     }
 }
 
-/// `γ ∇d_k ∇d_kᵀ` on dofs (both triangles) for the pairs of `mu` with `μ_k > 0`.
+/// `γ ∇d_k ∇d_kᵀ` on dofs (both triangles) for the pairs of `mu` in contact: `μ_k > 0` and
+/// `μ_k ≥ active_rel · max μ` ([`SqpSettings::normal_active_rel`]); an edge–edge pair of
+/// surfaces' or solids' edges gets `ee_factor·γ` instead where `ee_factor > 0`
+/// ([`SqpSettings::edge_edge_stiffness`]).
 pub(crate) fn normal_triplets(
     mesh: &Mesh,
     x: &[f64],
     col: &[usize],
     mu: &HashMap<ContactPair, f64>,
     gamma: f64,
+    active_rel: f64,
+    ee_factor: f64,
 ) -> Vec<(usize, usize, f64)> {
     if !gamma.is_finite() || gamma <= 0.0 {
         return Vec::new();
     }
+    let largest = mu
+        .values()
+        .filter(|m| m.is_finite())
+        .fold(0.0f64, |a, &b| a.max(b));
     let mut pairs: Vec<ContactPair> = mu
         .iter()
-        .filter(|(_, &m)| m > 0.0)
+        .filter(|(_, &m)| m > 0.0 && m >= active_rel * largest)
         .map(|(p, _)| *p)
         .collect();
     pairs.sort();
@@ -671,6 +705,11 @@ pub(crate) fn normal_triplets(
             }
         }
         g.retain(|(d, _)| col[*d] != usize::MAX);
+        let gamma = if ee_factor > 0.0 && surface_edge_pair(mesh, pair) {
+            ee_factor * gamma
+        } else {
+            gamma
+        };
         for &(a, va) in &g {
             for &(b, vb) in &g {
                 trip.push((a, b, gamma * va * vb));
@@ -1228,7 +1267,7 @@ pub(crate) fn sqp_step(
         .sqp
         .model_terms(ctx.energy.model_is_psd(inner.hessian_model));
     let (mode, gamma) = (terms.curvature, terms.normal_stiffness);
-    let curvature = curvature_triplets(mesh, x, col, warm, mode);
+    let curvature = curvature_triplets(mesh, x, col, warm, mode, ctx.sqp.edge_edge_stiffness > 0.0);
     let (base, g) = build_qp_with(
         mesh,
         ctx.energy,
@@ -1241,7 +1280,15 @@ pub(crate) fn sqp_step(
         shift,
         &curvature,
         matches!(mode, Curvature::Full | Curvature::Interior) && !curvature.is_empty(),
-        &normal_triplets(mesh, x, col, warm, gamma),
+        &normal_triplets(
+            mesh,
+            x,
+            col,
+            warm,
+            gamma,
+            ctx.sqp.normal_active_rel,
+            ctx.sqp.edge_edge_stiffness,
+        ),
     )?;
     out.t_assembly_s += ta.elapsed().as_secs_f64();
     // The QP over the carried rows; solved again with the rows its solution violates.
@@ -1713,13 +1760,81 @@ mod tests {
         let col: Vec<usize> = (0..12).collect();
         let pair = ContactPair::EdgeEdge { a: 0, b: 1 };
         let mu: HashMap<ContactPair, f64> = [(pair, 1.0)].into_iter().collect();
-        let blocks = |mesh: &Mesh, mode| curvature_triplets(mesh, &x, &col, &mu, mode);
+        let blocks = |mesh: &Mesh, mode| curvature_triplets(mesh, &x, &col, &mu, mode, false);
         let full = blocks(&mesh, Curvature::Full);
         assert!(full.iter().any(|t| t.2 != 0.0), "no curvature: {full:?}");
         assert_eq!(blocks(&mesh, Curvature::Interior), full);
         mesh.bodies[1].kind = BodyKind::Surface;
         assert!(blocks(&mesh, Curvature::Interior).is_empty());
         assert_eq!(blocks(&mesh, Curvature::Full), full);
+    }
+
+    /// With `surface_edge_edge`, `interior` keeps a surface's edge–edge block as `full` has it.
+    #[test]
+    fn interior_curvature_keeps_surfaces_edge_edge_pairs_when_asked() {
+        let mut mesh = curves(
+            3,
+            vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.5, -0.5, 0.1, 0.5, 0.5, 0.1],
+            2,
+        );
+        mesh.bodies[1].kind = BodyKind::Surface;
+        let x = mesh.x_ref.clone();
+        let col: Vec<usize> = (0..12).collect();
+        let pair = ContactPair::EdgeEdge { a: 0, b: 1 };
+        let mu: HashMap<ContactPair, f64> = [(pair, 1.0)].into_iter().collect();
+        let full = curvature_triplets(&mesh, &x, &col, &mu, Curvature::Full, false);
+        assert!(full.iter().any(|t| t.2 != 0.0), "no curvature: {full:?}");
+        let kept = curvature_triplets(&mesh, &x, &col, &mu, Curvature::Interior, true);
+        assert_eq!(kept, full);
+    }
+
+    /// The normal stiffness goes to the pairs whose multiplier is at least `active_rel` of the
+    /// largest (every positive one at 0), and a surface's edge–edge pair gets `ee_factor·γ`.
+    #[test]
+    fn normal_stiffness_on_the_pairs_in_contact_and_edge_edge_factor() {
+        // lower: v0 (0, 0) – v1 (1, 0) – v2 (2, 0); upper: v3 (0.5, 0.1) – v4 (1.5, 0.1)
+        let mesh = curves(2, vec![0., 0., 1., 0., 2., 0., 0.5, 0.1, 1.5, 0.1], 3);
+        let x = mesh.x_ref.clone();
+        let col: Vec<usize> = (0..10).collect();
+        let (near, weak) = (
+            ContactPair::PointEdge { x: 3, a: 0 },
+            ContactPair::PointEdge { x: 4, a: 1 },
+        );
+        let mu: HashMap<ContactPair, f64> = [(near, 1.0), (weak, 1e-6)].into_iter().collect();
+        // whether a block touches vertex v's dofs
+        let touches = |t: &[(usize, usize, f64)], v: usize| {
+            t.iter()
+                .any(|&(i, j, w)| (i / 2 == v || j / 2 == v) && w != 0.0)
+        };
+        let all = normal_triplets(&mesh, &x, &col, &mu, 1.0, 0.0, 0.0);
+        assert!(touches(&all, 3) && touches(&all, 4), "{all:?}");
+        let active = normal_triplets(&mesh, &x, &col, &mu, 1.0, 1e-3, 0.0);
+        assert!(touches(&active, 3) && !touches(&active, 4), "{active:?}");
+        assert!(normal_triplets(&mesh, &x, &col, &mu, 0.0, 1e-3, 0.0).is_empty());
+        // 3D: the factor on a surface's edge–edge pair, not on two curves'
+        let mut mesh = curves(
+            3,
+            vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.5, -0.5, 0.1, 0.5, 0.5, 0.1],
+            2,
+        );
+        let x = mesh.x_ref.clone();
+        let col: Vec<usize> = (0..12).collect();
+        let mu: HashMap<ContactPair, f64> = [(ContactPair::EdgeEdge { a: 0, b: 1 }, 1.0)]
+            .into_iter()
+            .collect();
+        let one = normal_triplets(&mesh, &x, &col, &mu, 0.5, 0.0, 0.0);
+        assert!(one.iter().any(|t| t.2 != 0.0));
+        assert_eq!(normal_triplets(&mesh, &x, &col, &mu, 0.5, 0.0, 100.0), one);
+        mesh.bodies[1].kind = BodyKind::Surface;
+        let scaled = normal_triplets(&mesh, &x, &col, &mu, 0.5, 0.0, 100.0);
+        assert_eq!(scaled.len(), one.len());
+        for (a, b) in scaled.iter().zip(&one) {
+            assert_eq!((a.0, a.1), (b.0, b.1));
+            assert!(
+                (a.2 - 100.0 * b.2).abs() <= 1e-12 * b.2.abs(),
+                "{a:?} {b:?}"
+            );
+        }
     }
 
     /// A vertex above the first of two edges meeting at v1 (closest point inside it) is
@@ -2273,6 +2388,7 @@ mod tests {
                 &dofs.col,
                 &mu,
                 Curvature::Full,
+                false,
             ));
             let nd = ph.nv * 2;
             let local = |p: usize| 2 * ph.vertices[p / 2] + p % 2;
@@ -2287,9 +2403,9 @@ mod tests {
                     assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0));
                 }
             }
-            assert!(curvature_triplets(mesh, x, &dofs.col, &mu, Curvature::Off).is_empty());
+            assert!(curvature_triplets(mesh, x, &dofs.col, &mu, Curvature::Off, false).is_empty());
             for (mi, mode) in [Curvature::Psd, Curvature::Tangent].into_iter().enumerate() {
-                let m = dense(&curvature_triplets(mesh, x, &dofs.col, &mu, mode));
+                let m = dense(&curvature_triplets(mesh, x, &dofs.col, &mu, mode, false));
                 let mut idx: Vec<usize> = m.keys().map(|k| k.0).collect();
                 idx.sort();
                 idx.dedup();

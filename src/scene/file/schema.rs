@@ -68,6 +68,13 @@ pub struct SolverSpec {
     /// SQP: after a full step, try 2, 4, …, 2^k times it while J falls and every check passes
     /// (used with `outer_method = "sqp"`; 0: off).
     pub sqp_extrapolate: Option<usize>,
+    /// SQP: the normal stiffness only on the pairs whose last multiplier is at least this
+    /// fraction of the largest (in [0, 1]; used with `outer_method = "sqp"`; 0: every
+    /// positive one).
+    pub sqp_normal_active_rel: Option<f64>,
+    /// SQP: `interior` keeps surfaces' edge–edge pairs, with this factor on their normal
+    /// stiffness (finite, ≥ 0; used with `outer_method = "sqp"`; 0: left out).
+    pub sqp_edge_edge_stiffness: Option<f64>,
 }
 
 /// The names `[solver].pruning` takes (the TOML and JSON spelling of the solver's pruning modes,
