@@ -26,7 +26,7 @@ use crate::contact::{ContactPair, PairRows};
 use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
 use crate::solve::qp_units::solve_in_units;
-use contactlab_solvers::linalg::{LdlSymbolic, SparseLdl};
+use contactlab_solvers::linalg::CholeskyTest;
 use contactlab_solvers::{CscMatrix, Qp, QpBackend, QpError, QpStatus, WarmStart};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -122,7 +122,7 @@ pub struct ModelShift {
     pub max_sigma: f64,
     /// Cholesky factorizations tried.
     pub factorizations: usize,
-    sym: Option<LdlSymbolic>,
+    chol: Option<CholeskyTest>,
 }
 
 impl ModelShift {
@@ -152,10 +152,10 @@ impl ModelShift {
             })
             .collect();
         let base: Vec<f64> = diag.iter().map(|&k| m.nzval[k]).collect();
-        if !self.sym.as_ref().is_some_and(|s| s.matches(&m)) {
-            self.sym = LdlSymbolic::new(&m);
+        if !self.chol.as_ref().is_some_and(|c| c.matches(&m)) {
+            self.chol = CholeskyTest::new(&m);
         }
-        let Some(sym) = self.sym.as_ref() else {
+        let Some(chol) = self.chol.as_mut() else {
             return Err(QpError::NotFinite {
                 what: "Newton model (pattern)",
                 index: 0,
@@ -174,7 +174,7 @@ impl ModelShift {
                 m.nzval[p] = base[k] + sigma;
             }
             self.factorizations += 1;
-            if SparseLdl::numeric(&m, sym).is_some() {
+            if chol.is_positive_definite(&m) {
                 if sigma > 0.0 && bisections > 0 {
                     // between the last failure (or σ/4 where the search started at σ) and σ
                     let (mut lo, mut hi) = (failed.unwrap_or(sigma / 4.0), sigma);
@@ -185,7 +185,7 @@ impl ModelShift {
                                 m.nzval[p] = base[k] + mid;
                             }
                             self.factorizations += 1;
-                            if SparseLdl::numeric(&m, sym).is_some() {
+                            if chol.is_positive_definite(&m) {
                                 hi = mid;
                             } else {
                                 lo = mid;
