@@ -114,7 +114,7 @@ impl Default for InnerSettings {
 /// `σI` stiffens every direction, the soft ones too. [`HessianModel::ShiftedTight`] bisects
 /// `σ` in log space between the grid point that failed and the one that passed
 /// ([`HessianModel::shift_bisections`] more factorizations), to within a factor `4^(1/64)`.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct ModelShift {
     /// The last shift chosen.
     pub sigma: f64,
