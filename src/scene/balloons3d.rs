@@ -15,7 +15,11 @@
 //! **Rigid motions.** The three vertices of each balloon's pad are fixed: the balloon is glued
 //! to the floor by one small triangle (one pinned vertex would leave the rotations about it
 //! free of energy until contact). The glued triangle keeps its reference shape; the rest of
-//! the balloon grows around it.
+//! the balloon grows around it. That triangle's size is h, so the balloon's twist about its
+//! vertical axis, which the flat frictionless walls do not resist, gets softer at every level
+//! (docs/method.md, "balloons3d n = 3's tail"); `pad_radius > 0` glues every vertex within that
+//! distance of the pad's centre as well (on the reference sphere, fixed where it is), a glued
+//! region whose size does not depend on h.
 //!
 //! **Energy.** Per balloon, the St Venant–Kirchhoff membrane ([`crate::energy::Membrane3dEnergy`],
 //! `W = μ|E|² + λ/2 (tr E)²` per unit reference area) and the gas ([`crate::energy::Gas3dEnergy`],
@@ -72,6 +76,10 @@ pub struct Balloons3dParams {
     pub pad_gap: f64,
     /// Turn of `balloon1`'s mesh about its vertical axis, in degrees.
     pub twist_deg: f64,
+    /// Radius of the glued region: every balloon vertex whose reference position is within
+    /// this distance of the pad's centre (the point of the reference sphere in the direction
+    /// of the pad's centroid) is fixed as well. 0: the pad triangle alone, whose size is h.
+    pub pad_radius: f64,
 }
 
 impl Default for Balloons3dParams {
@@ -85,6 +93,7 @@ impl Default for Balloons3dParams {
             radius: 0.8,
             pad_gap: 0.05,
             twist_deg: 17.0,
+            pad_radius: 0.0,
         }
     }
 }
@@ -276,6 +285,13 @@ impl Balloons3dParams {
         if !self.twist_deg.is_finite() {
             return bad("twist_deg", self.twist_deg.to_string(), "must be finite");
         }
+        if !(self.pad_radius >= 0.0 && self.pad_radius < self.radius) {
+            return bad(
+                "pad_radius",
+                self.pad_radius.to_string(),
+                "must be ≥ 0 and < radius (the glued region is a cap of the balloon)",
+            );
+        }
         Ok(())
     }
 }
@@ -358,6 +374,8 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
             },
         );
         let off = k * nb;
+        let [a, b, c] = sphere_tris[pad];
+        let pad_centre = (unit[a] + unit[b] + unit[c]).normalize();
         for (v, q) in unit.iter().enumerate() {
             let r = turn * q * p.radius;
             let z = if sphere_tris[pad].contains(&v) {
@@ -366,7 +384,8 @@ pub fn build(p: &Balloons3dParams) -> Result<Scene, Balloons3dError> {
                 zc + r.z
             };
             x.extend_from_slice(&[xc + r.x, r.y, z]);
-            fixed.push(sphere_tris[pad].contains(&v));
+            let glued = p.pad_radius > 0.0 && p.radius * (q - pad_centre).norm() < p.pad_radius;
+            fixed.push(sphere_tris[pad].contains(&v) || glued);
         }
         let tris: Vec<[usize; 3]> = sphere_tris.iter().map(|t| t.map(|v| v + off)).collect();
         bodies_tris.push(tris);
@@ -471,6 +490,7 @@ impl LevelScene for Balloons3d {
                 ("radius", |p| &mut p.radius),
                 ("pad_gap", |p| &mut p.pad_gap),
                 ("twist_deg", |p| &mut p.twist_deg),
+                ("pad_radius", |p| &mut p.pad_radius),
             ],
             &[],
         )?;
@@ -611,8 +631,61 @@ mod tests {
     }
 
     #[test]
+    fn balloons3d_pad_radius_glues_a_cap_of_that_size_at_every_level() {
+        // 0 (the default): the pad triangle's three vertices per balloon, at every level
+        for n in [1, 3] {
+            let s = build(&Balloons3dParams {
+                n,
+                ..Default::default()
+            })
+            .unwrap();
+            let nb = s.mesh.bodies[0].vertices.len();
+            assert_eq!(s.mesh.fixed[..2 * nb].iter().filter(|&&f| f).count(), 6);
+        }
+        let r = 0.25;
+        let mut glued = Vec::new();
+        for n in [1, 3, 4] {
+            let p = Balloons3dParams {
+                n,
+                pad_radius: r,
+                ..Default::default()
+            };
+            let s = build(&p).unwrap();
+            let m = &s.mesh;
+            for b in 0..2 {
+                let verts = &m.bodies[b].vertices;
+                let fixed: Vec<usize> = verts.iter().copied().filter(|&v| m.fixed[v]).collect();
+                // the glued vertices lie in one cap: within 2r of each other, around the
+                // lowest point, and the free ones outside it
+                let lowest = *verts
+                    .iter()
+                    .min_by(|&&a, &&c| s.x0[3 * a + 2].total_cmp(&s.x0[3 * c + 2]))
+                    .unwrap();
+                for &v in &fixed {
+                    assert!((p3(&s.x0, v) - p3(&s.x0, lowest)).norm() < 2.0 * r + 1e-12);
+                }
+                if b == 0 {
+                    glued.push(fixed.len());
+                }
+            }
+            let (d, _) = min_distance_3d(m, &s.x0, s.eps);
+            assert!(d >= s.eps, "n = {n}: {d}");
+        }
+        // the region keeps its size, so it holds more vertices at finer levels (the pad's 3
+        // at n = 1)
+        assert_eq!(glued, vec![3, 14, 61]);
+    }
+
+    #[test]
     fn balloons3d_bad_params_are_named() {
         let msg = |p: Balloons3dParams| build(&p).err().unwrap().to_string();
+        for (v, shown) in [(-0.1, "-0.1"), (0.8, "0.8"), (f64::NAN, "NaN")] {
+            let e = msg(Balloons3dParams {
+                pad_radius: v,
+                ..Default::default()
+            });
+            assert!(e.contains(&format!("invalid pad_radius = {shown}")), "{e}");
+        }
         let e = msg(Balloons3dParams {
             n: 0,
             ..Default::default()
