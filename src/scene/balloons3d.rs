@@ -655,8 +655,8 @@ mod tests {
             for b in 0..2 {
                 let verts = &m.bodies[b].vertices;
                 let fixed: Vec<usize> = verts.iter().copied().filter(|&v| m.fixed[v]).collect();
-                // the glued vertices lie in one cap: within 2r of each other, around the
-                // lowest point, and the free ones outside it
+                // the glued vertices lie in one cap around the pad: each within 2r of the
+                // balloon's lowest vertex
                 let lowest = *verts
                     .iter()
                     .min_by(|&&a, &&c| s.x0[3 * a + 2].total_cmp(&s.x0[3 * c + 2]))
