@@ -93,9 +93,10 @@ pub struct RunArgs {
     pub newton_model: HessianModel,
     /// The outer method: auto (Pantz's map while it converges, then sqp with the one command
     /// line's settings and --sqp-normal-active-rel 0.001 --sqp-edge-edge-stiffness 100 once it
-    /// creeps or stops uncertified; docs/method.md, "Pantz's map, then SQP"), pantz (the paper's T(ψ) steps throughout) or sqp (steps on the linearized true
-    /// distances, with a correction, an exact and a continuous check, Pantz's step as the
-    /// fallback; docs/method.md, "The SQP outer method").
+    /// creeps or stops uncertified; docs/method.md, "Pantz's map, then SQP"), pantz (the
+    /// paper's T(ψ) steps throughout) or sqp (steps on the linearized true distances, with a
+    /// correction, an exact and a continuous check, Pantz's step as the fallback;
+    /// docs/method.md, "The SQP outer method").
     #[arg(long, default_value_t = OuterMethod::default(), value_parser = parse_outer_method)]
     pub outer_method: OuterMethod,
     /// With --outer-method sqp: the constraints' curvature −Σ μ_k ∇²d_k in the QP's Hessian:
