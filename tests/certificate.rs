@@ -447,22 +447,83 @@ fn certificate_paths_agree_on_real_states() {
             .unwrap()
         };
         let exact = cert(CertificatePath::ActiveSet);
-        let qp = cert(CertificatePath::Qp {
-            backend: CERTIFICATE_BACKEND,
-            tol: CERTIFICATE_TOL,
-        });
         assert!(exact.generators > 0, "{name}");
-        assert_eq!((exact.unresolved, qp.unresolved), (0, 0), "{name}");
-        assert_eq!(qp.method, "qp");
-        let diff = (qp.kappa - exact.kappa).abs();
-        if exact.kappa >= 1e-3 {
-            assert!(diff <= 1e-9, "{name}: {exact:?} {qp:?}");
-            assert!(qp.dual_gap <= 1e-8, "{name}: {qp:?}");
-        } else {
-            assert!(diff <= 1e-7, "{name}: {exact:?} {qp:?}");
+        // the registry's certificate backend, and `ip` (`--certificate-backend ip`)
+        for backend in [CERTIFICATE_BACKEND, "ip"] {
+            let qp = cert(CertificatePath::Qp {
+                backend,
+                tol: CERTIFICATE_TOL,
+            });
+            assert_eq!(
+                (exact.unresolved, qp.unresolved),
+                (0, 0),
+                "{name} {backend}"
+            );
+            assert_eq!(qp.method, "qp");
+            let diff = (qp.kappa - exact.kappa).abs();
+            if exact.kappa >= 1e-3 {
+                assert!(diff <= 1e-9, "{name} {backend}: {exact:?} {qp:?}");
+                assert!(qp.dual_gap <= 1e-8, "{name} {backend}: {qp:?}");
+            } else {
+                assert!(diff <= 1e-7, "{name} {backend}: {exact:?} {qp:?}");
+            }
         }
     }
     // the scenes cover both kinds of state
     assert!(states.iter().any(|s| s.2.certificate.kappa >= 1e-3));
     assert!(states.iter().any(|s| s.2.certificate.kappa <= 1e-6));
+}
+
+/// `contactlab run ARGS --quiet --out DIR`: its exit code, stderr and (where written)
+/// summary.json.
+fn cli(args: &[&str], tag: &str) -> (Option<i32>, String, Option<serde_json::Value>) {
+    let dir = std::env::temp_dir().join(format!("contactlab-cert-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .arg("run")
+        .args(args)
+        .args(["--quiet", "--frame-every", "1000000", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let summary = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .map(|t| serde_json::from_str(&t).unwrap());
+    let _ = std::fs::remove_dir_all(&dir);
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into(),
+        summary,
+    )
+}
+
+#[test]
+fn certificate_backend_is_chosen_on_the_command_line() {
+    // balloons n = 800: 3 268 generators at its certified state, so the certificate takes
+    // the dual QP (from QP_PATH_MIN_GENERATORS on), with the backend given
+    let (code, err, s) = cli(
+        &["balloons", "--n", "800", "--certificate-backend", "ip"],
+        "ip",
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let s = s.unwrap();
+    assert_eq!(s["settings"]["certificate_backend"], "ip");
+    assert_eq!(s["status"], "converged");
+    let c = &s["certificate"];
+    assert_eq!(c["method"], "qp", "{c}");
+    assert!(c["generators"].as_u64().unwrap() >= 3000, "{c}");
+    assert!(c["kappa"].as_f64().unwrap() <= 1e-5, "{c}");
+    // bad names and dynamic runs are refused by name, with the usage-error code
+    let (code, err, _) = cli(
+        &["balloons", "--n", "20", "--certificate-backend", "nope"],
+        "bad",
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--certificate-backend \"nope\""), "{err}");
+    let (code, err, _) = cli(&["drop", "--dynamic", "--certificate-backend", "ip"], "dyn");
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("--certificate-backend is an option of static runs"),
+        "{err}"
+    );
 }

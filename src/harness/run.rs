@@ -218,6 +218,11 @@ pub struct RunArgs {
     /// above); 0: no check.
     #[arg(long, default_value_t = SECOND_ORDER_MAX_DOFS)]
     pub second_order_max_dofs: usize,
+    /// The backend of the minimality certificate's dual QP, used from 3 000 generators on
+    /// (default: the registry's, Clarabel). `ip` is the one for large 3D states
+    /// (docs/method.md, "The minimality certificate").
+    #[arg(long, value_name = "BACKEND")]
+    pub certificate_backend: Option<String>,
     /// Where that check finds a converged state is not a minimum (a saddle of the contact
     /// set), go on from the lower admissible point it found (an outer step `escape`, at most
     /// 10; docs/method.md, "The second-order check"). The default of static runs with the
@@ -644,6 +649,9 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     if a.dynamic && a.escape_saddles {
         bail!("--escape-saddles is an option of static runs, not of --dynamic");
     }
+    if a.dynamic && a.certificate_backend.is_some() {
+        bail!("--certificate-backend is an option of static runs, not of --dynamic");
+    }
     if a.dynamic && (a.start_from.is_some() || a.start_perturb != 0.0) {
         bail!("--start-from and --start-perturb are options of static runs, not of --dynamic");
     }
@@ -765,6 +773,12 @@ pub fn run_cmd(a: RunArgs, explicit: &dyn Fn(&str) -> bool) -> Result<()> {
     let mut backend = backend_from_name(&rs.backend, &qps)?;
     let mut settings = rs.outer_settings();
     settings.second_order_max_dofs = a.second_order_max_dofs;
+    if let Some(b) = &a.certificate_backend {
+        if let Err(e) = backend_from_name(b, &qps) {
+            bail!("--certificate-backend {b:?}: {e}");
+        }
+        settings.certificate_backend = Some(b.clone());
+    }
     let method = settings.method;
     // Pantz's map stays the paper's method unless asked: it escapes only with the flag.
     settings.escape_saddles =

@@ -182,6 +182,12 @@ pub enum CertificatePath<'a> {
     /// The active set below [`QP_PATH_MIN_GENERATORS`] distinct generators, the dual QP with
     /// [`CERTIFICATE_BACKEND`] at [`CERTIFICATE_TOL`] from there (what [`certificate`] does).
     Auto,
+    /// [`CertificatePath::Auto`] with another backend of the registry for the dual QP (at
+    /// [`CERTIFICATE_TOL`]).
+    AutoWith {
+        /// A name of the backend registry.
+        backend: &'a str,
+    },
     /// Lawson–Hanson on the dense normal equations (exact to round-off; `O(k³)`).
     ActiveSet,
     /// The sparse dual QP with a registered backend at a tolerance (`eps_abs = eps_rel`).
@@ -486,7 +492,12 @@ pub fn certificate_with(
         CertificatePath::Auto if cols.len() >= QP_PATH_MIN_GENERATORS => {
             Some((CERTIFICATE_BACKEND, CERTIFICATE_TOL))
         }
-        CertificatePath::Auto | CertificatePath::ActiveSet => None,
+        CertificatePath::AutoWith { backend } if cols.len() >= QP_PATH_MIN_GENERATORS => {
+            Some((backend, CERTIFICATE_TOL))
+        }
+        CertificatePath::Auto | CertificatePath::AutoWith { .. } | CertificatePath::ActiveSet => {
+            None
+        }
         CertificatePath::Qp { backend, tol } => Some((backend, tol)),
     };
     let solve = |v: &mut [f64]| free.solve_in_place(v);
@@ -1358,6 +1369,10 @@ mod tests {
             tol: CERTIFICATE_TOL,
         });
         let auto = cert(CertificatePath::Auto);
+        // another backend for the dual QP changes nothing below QP_PATH_MIN_GENERATORS
+        let with_ip = cert(CertificatePath::AutoWith { backend: "ip" });
+        assert_eq!(with_ip.method, "active_set");
+        assert_eq!(with_ip.kappa.to_bits(), auto.kappa.to_bits());
         assert_eq!(exact.generators, 3);
         assert_eq!(
             (exact.method.as_str(), qp.method.as_str()),

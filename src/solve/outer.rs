@@ -17,7 +17,7 @@ use crate::contact::{
 use crate::contact::{MinDistance, PairSet};
 use crate::energy::{HessianModel, Objective};
 use crate::scene::mesh::Mesh;
-use crate::solve::certificate::{certificate, Certificate, CertificateError};
+use crate::solve::certificate::{certificate_with, Certificate, CertificateError, CertificatePath};
 use crate::solve::h1::{H1Error, H1Norms};
 use crate::solve::observer::{Loop, Observer};
 use crate::solve::second_order::{second_order, SecondOrder};
@@ -150,6 +150,11 @@ pub struct OuterSettings {
     /// admissible point it found, an outer step `escape`, at most [`MAX_ESCAPES`] times.
     /// Default false; `contactlab run` sets it with the `auto` and `sqp` outer methods.
     pub escape_saddles: bool,
+    /// The backend of the certificate's dual QP (a name of the backend registry; from
+    /// [`crate::solve::certificate::QP_PATH_MIN_GENERATORS`] generators on), `None` for the
+    /// registry's `CERTIFICATE_BACKEND` (Clarabel). `contactlab run --certificate-backend`
+    /// sets it (docs/method.md, "The minimality certificate").
+    pub certificate_backend: Option<String>,
 }
 
 /// Escapes from saddles in one run at most ([`OuterSettings::escape_saddles`]).
@@ -174,6 +179,7 @@ impl Default for OuterSettings {
             polish: true,
             second_order_max_dofs: 0,
             escape_saddles: false,
+            certificate_backend: None,
         }
     }
 }
@@ -980,7 +986,11 @@ fn outer_loop(
     let cert_time = std::cell::Cell::new((0usize, 0.0f64));
     let certify = |x: &[f64], warm: &HashMap<ContactPair, f64>| {
         let t = Instant::now();
-        let c = certificate(mesh, energy, x, eps, active_tol, &norms, warm);
+        let path = match settings.certificate_backend.as_deref() {
+            Some(backend) => CertificatePath::AutoWith { backend },
+            None => CertificatePath::Auto,
+        };
+        let c = certificate_with(mesh, energy, x, eps, active_tol, &norms, warm, path);
         let (calls, seconds) = cert_time.get();
         cert_time.set((calls + 1, seconds + t.elapsed().as_secs_f64()));
         c.map(|c| with_scale_floor(c, scale_floor))
